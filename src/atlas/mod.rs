@@ -1,0 +1,2 @@
+//! The atlas pipeline: pure, synchronous and deterministic.
+pub mod parameterize;

@@ -1,0 +1,1 @@
+//! The `texatlas inspect` report.

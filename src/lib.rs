@@ -1,0 +1,43 @@
+//! # texatlas
+//!
+//! A texture-atlas service: glTF 2.0 assets come in, their triangle meshes are cut into charts,
+//! each chart is flattened (LSCM, and hierarchical LSCM for big charts) and the charts are packed
+//! into one atlas. The same asset goes out with new UVs, plus a quality report.
+//!
+//! ## Bird's-eye view
+//!
+//! ```text
+//!  bytes ──gltf_io::decode──▶ Asset ──Asset::mesh_input──▶ mesh::MeshInput
+//!                                                              │ TriangleMesh::build (weld, validate, repair)
+//!                                                              ▼
+//!                                                        mesh::TriangleMesh
+//!                                                              │ atlas (segment → parameterize → pack → measure)
+//!                                                              ▼
+//!  bytes ◀──gltf_io::encode── Asset + per-corner UVs ◀──────── atlas
+//! ```
+//!
+//! ## Code map
+//!
+//! - [`mesh`]: the validated triangle mesh: typed ids, weld by position, half-edge connectivity,
+//!   defects and the repair policy. Depends on nothing else in the crate.
+//! - [`numerics`]: sparse assembly, preconditioned CG, sparse Cholesky (faer, behind one module).
+//!   Knows nothing of meshes.
+//! - [`atlas`]: the pipeline. Today: chart parameterization (LSCM, progressive mesh, HLSCM).
+//! - [`gltf_io`]: the only module that knows glTF: decode (with JSON paths for every defect) and
+//!   encode (split vertices at UV seams, carry everything else through).
+//! - [`inspect`]: the `texatlas inspect` report (plain data, built from `gltf_io` + `mesh`).
+//!
+//! ## Architecture invariants
+//!
+//! - `mesh`, `numerics` and `atlas` do no IO, use no tokio, axum, serde, SQL, `std::fs`,
+//!   `std::net` or wall-clock time, and are deterministic: the same input gives the same output
+//!   bits whatever the thread count. `tests/architecture.rs` checks the `use` lines.
+//! - Only `gltf_io` knows glTF. The decoder never touches the filesystem or the network: external
+//!   buffers and images are handed to it by the caller as named byte blobs.
+//! - Units are in names and types: model space is in the asset's units (`_m`, `_m2`), UVs are
+//!   normalized to [0,1], angles are in radians (`_rad`).
+pub mod atlas;
+pub mod gltf_io;
+pub mod inspect;
+pub mod mesh;
+pub mod numerics;

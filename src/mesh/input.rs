@@ -1,0 +1,18 @@
+//! The raw input to mesh building: a triangle soup as it comes out of a file.
+
+/// A triangle soup, before welding and validation.
+///
+/// Invariant expected by `TriangleMesh::build` (checked there, never assumed):
+/// `weld_group.len() == positions_m.len()` and every index in `triangles` is `< positions_m.len()`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MeshInput {
+    /// Vertex positions in model units. One entry per source vertex (before welding).
+    pub positions_m: Vec<[f64; 3]>,
+    /// Triangles as indices into `positions_m`, in the source's corner order. Face `i` of the
+    /// built mesh is triangle `i` here: the order is never changed, so results map back 1:1.
+    pub triangles: Vec<[u32; 3]>,
+    /// Welding scope per source vertex: two vertices are welded only if their positions are
+    /// bit-identical (after `-0.0 == 0.0`) AND their groups are equal. `gltf_io` uses the glTF
+    /// mesh index, because different meshes live in different local spaces.
+    pub weld_group: Vec<u32>,
+}

@@ -1,0 +1,1 @@
+//! Sparse linear algebra. Knows nothing of meshes.
