@@ -141,7 +141,11 @@ impl TriangleMesh {
             // Exact for an oriented manifold (see module invariants); clamped so that a broken
             // invariant shows up as a wrong count in tests rather than a panic.
             let twice_g = 2 - chi - info.num_boundary_loops as i64;
-            debug_assert!(twice_g >= 0 && twice_g % 2 == 0, "χ={chi} b={}", info.num_boundary_loops);
+            debug_assert!(
+                twice_g >= 0 && twice_g % 2 == 0,
+                "χ={chi} b={}",
+                info.num_boundary_loops
+            );
             info.genus = u32::try_from(twice_g.max(0) / 2).unwrap_or(u32::MAX);
         }
         Components {

@@ -71,44 +71,47 @@ pub fn cube_split_faces() -> MeshInput {
 }
 
 /// A UV sphere of radius `radius_m` with `n_lat >= 2` latitude bands and `n_lon >= 3` longitude
-/// segments, laid out like an exported textured sphere: the longitude seam is duplicated
-/// (`n_lon + 1` columns) and each pole has `n_lon + 1` copies. Source vertices
-/// `(n_lat + 1)(n_lon + 1)`; welds to `2 + (n_lat − 1)·n_lon`; `2·n_lon·(n_lat − 1)` triangles;
-/// closed, genus 0.
+/// segments, laid out like an exported textured sphere: each ring has a duplicated seam vertex
+/// (`n_lon + 1` per ring) and each pole has one copy per cap triangle (`n_lon`). Source vertices
+/// `2·n_lon + (n_lat − 1)(n_lon + 1)`, welding to `2 + (n_lat − 1)·n_lon`; `2·n_lon·(n_lat − 1)`
+/// triangles; closed, genus 0.
 pub fn uv_sphere(n_lat: u32, n_lon: u32, radius_m: f64) -> MeshInput {
     let mut positions = Vec::new();
-    for i in 0..=n_lat {
+    let north = |j: u32| j;
+    let ring = |i: u32, j: u32| n_lon + (i - 1) * (n_lon + 1) + j;
+    let south = |j: u32| n_lon + (n_lat - 1) * (n_lon + 1) + j;
+    positions.extend((0..n_lon).map(|_| [0.0, 0.0, radius_m]));
+    for i in 1..n_lat {
+        let theta = PI * f64::from(i) / f64::from(n_lat);
         for j in 0..=n_lon {
-            let p = if i == 0 {
-                [0.0, 0.0, radius_m]
-            } else if i == n_lat {
-                [0.0, 0.0, -radius_m]
-            } else {
-                let theta = PI * f64::from(i) / f64::from(n_lat);
-                let phi = 2.0 * PI * f64::from(j % n_lon) / f64::from(n_lon);
-                [
-                    radius_m * theta.sin() * phi.cos(),
-                    radius_m * theta.sin() * phi.sin(),
-                    radius_m * theta.cos(),
-                ]
-            };
-            positions.push(p);
+            let phi = 2.0 * PI * f64::from(j % n_lon) / f64::from(n_lon);
+            positions.push([
+                radius_m * theta.sin() * phi.cos(),
+                radius_m * theta.sin() * phi.sin(),
+                radius_m * theta.cos(),
+            ]);
         }
     }
-    let id = |i: u32, j: u32| i * (n_lon + 1) + j;
+    positions.extend((0..n_lon).map(|_| [0.0, 0.0, -radius_m]));
     let mut tris = Vec::new();
-    for i in 0..n_lat {
+    // Rows go south, columns go east; every triangle is counter-clockwise seen from outside.
+    for j in 0..n_lon {
+        tris.push([north(j), ring(1, j), ring(1, j + 1)]);
+    }
+    for i in 1..n_lat - 1 {
         for j in 0..n_lon {
-            // Going down in latitude and east in longitude; (a, b, c) is counter-clockwise
-            // seen from outside.
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            if i != n_lat - 1 {
-                tris.push([a, b, c]);
-            }
-            if i != 0 {
-                tris.push([a, c, d]);
-            }
+            let (a, b, c, d) = (
+                ring(i, j),
+                ring(i + 1, j),
+                ring(i + 1, j + 1),
+                ring(i, j + 1),
+            );
+            tris.push([a, b, c]);
+            tris.push([a, c, d]);
         }
+    }
+    for j in 0..n_lon {
+        tris.push([ring(n_lat - 1, j), south(j), ring(n_lat - 1, j + 1)]);
     }
     single_group(positions, tris)
 }

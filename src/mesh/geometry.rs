@@ -62,18 +62,19 @@ pub(crate) fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }
 
-/// The two edge vectors from corner 0, scaled by the largest absolute component so that squares
-/// and cross products cannot overflow even for coordinates near `f64::MAX`. Returns the scale too.
+/// The two edge vectors from corner 0 of the triangle scaled by `1 / m`, where `m` is the largest
+/// absolute coordinate, so that differences, squares and cross products neither overflow (even for
+/// coordinates near `f64::MAX`) nor underflow (tiny coordinates). Returns `m` too (0 when every
+/// corner is at the origin).
 #[inline]
 fn scaled_edges(p: &[[f64; 3]; 3]) -> ([f64; 3], [f64; 3], f64) {
-    let e1 = sub(p[1], p[0]);
-    let e2 = sub(p[2], p[0]);
-    let m = e1.iter().chain(&e2).fold(0.0f64, |m, x| m.max(x.abs()));
+    let m = p.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
     if m == 0.0 || !m.is_finite() {
-        return (e1, e2, m);
+        return (sub(p[1], p[0]), sub(p[2], p[0]), m);
     }
-    let s = 1.0 / m;
-    (e1.map(|x| x * s), e2.map(|x| x * s), m)
+    // Division rather than multiplication by `1 / m`: `1 / m` overflows for subnormal `m`.
+    let q = p.map(|c| c.map(|x| x / m));
+    (sub(q[1], q[0]), sub(q[2], q[0]), m)
 }
 
 /// True when the triangle `p` has (numerically) zero area; see [`ZERO_AREA_RELATIVE_TOLERANCE`].

@@ -197,7 +197,10 @@ impl<I: ElementId, T> IdVec<I, T> {
     }
     /// `(id, value)` pairs in id order.
     pub fn iter(&self) -> impl ExactSizeIterator<Item = (I, &T)> + '_ {
-        self.data.iter().enumerate().map(|(i, t)| (I::from_index(i), t))
+        self.data
+            .iter()
+            .enumerate()
+            .map(|(i, t)| (I::from_index(i), t))
     }
     /// The underlying slice, in id order.
     pub fn as_slice(&self) -> &[T] {

@@ -17,6 +17,9 @@
 //! - `opposite(opposite(h)) == h`, `opposite(h) != h`, opposite half-edges run in reverse;
 //! - every vertex's incident faces form one fan (a disk or half-disk): the mesh is a manifold
 //!   with boundary, and it is oriented (glued half-edges always run in opposite directions).
+//! - Edges are half-edge pairs, not vertex pairs: after the repair of a non-manifold edge, two
+//!   distinct edges can join the same two vertices (a cut fin lying over a glued pair). Code that
+//!   needs an edge key must use the half-edge (e.g. `min(h, opposite(h))`), never `(v0, v1)`.
 //!
 //! Units: none here; geometry lives in `geometry.rs`.
 use super::defect::DegenerateKind;
@@ -313,7 +316,9 @@ impl TriangleMesh {
                 if o == h || self.opposite(o) != Some(h) {
                     return bad(format!("opposite is not an involution at {h}"));
                 }
-                if self.from_vertex(o) != self.to_vertex(h) || self.to_vertex(o) != self.from_vertex(h) {
+                if self.from_vertex(o) != self.to_vertex(h)
+                    || self.to_vertex(o) != self.from_vertex(h)
+                {
                     return bad(format!("{h} and its opposite {o} do not run in reverse"));
                 }
             }
@@ -334,7 +339,9 @@ impl TriangleMesh {
                     return bad(format!("rotation around {v} does not close"));
                 }
                 if self.from_vertex(cur) != v {
-                    return bad(format!("rotation around {v} reached {cur} which leaves elsewhere"));
+                    return bad(format!(
+                        "rotation around {v} reached {cur} which leaves elsewhere"
+                    ));
                 }
                 match self.opposite(cur.prev()) {
                     None => {
@@ -352,7 +359,9 @@ impl TriangleMesh {
                 ));
             }
             if ended_open != self.is_boundary_halfedge(h) {
-                return bad(format!("fan of {v} is open but does not start on its boundary half-edge"));
+                return bad(format!(
+                    "fan of {v} is open but does not start on its boundary half-edge"
+                ));
             }
         }
         Ok(())
