@@ -3,6 +3,7 @@
 //! (`$TEXATLAS_EVAL_DIR/atlas_eval.py --input IN --uv K --json` → `roundtrip.ok == true`) and,
 //! when `$TEXATLAS_GLTF_VALIDATOR` names a node_modules dir with gltf-validator, with the Khronos
 //! validator (0 errors). Skipped (with a message) when `TEXATLAS_CORPUS_DIR` is unset.
+//! `TEXATLAS_CORPUS_ONLY=substr` restricts the run to matching file names.
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -34,7 +35,11 @@ fn corpus_round_trips_through_the_evaluator_and_validator() {
         return;
     };
     let corpus = PathBuf::from(corpus);
-    let out_dir = std::env::temp_dir().join(format!("texatlas-corpus-{}", std::process::id()));
+    // TEXATLAS_CORPUS_KEEP=DIR keeps the encoded files there for inspection.
+    let keep = std::env::var_os("TEXATLAS_CORPUS_KEEP").map(PathBuf::from);
+    let out_dir = keep
+        .clone()
+        .unwrap_or_else(|| std::env::temp_dir().join(format!("texatlas-corpus-{}", std::process::id())));
     std::fs::create_dir_all(&out_dir).expect("temp dir");
     let mut files: Vec<PathBuf> = std::fs::read_dir(&corpus)
         .expect("corpus dir readable")
@@ -62,7 +67,9 @@ fn corpus_round_trips_through_the_evaluator_and_validator() {
             }
         }
     }
-    let _ = std::fs::remove_dir_all(&out_dir);
+    if keep.is_none() {
+        let _ = std::fs::remove_dir_all(&out_dir);
+    }
     assert!(
         failures.is_empty(),
         "corpus failures:\n{}",

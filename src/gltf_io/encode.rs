@@ -342,34 +342,43 @@ struct Split {
     indices: Vec<u32>,
 }
 
-fn split_vertices(
-    prim: &TrianglePrimitive,
-    triangles: &[[u32; 3]],
-    corner_uvs: &[[[f32; 2]; 3]],
-) -> Split {
+fn split_vertices(prim: &TrianglePrimitive, triangles: &[[u32; 3]], corner_uvs: &[[[f32; 2]; 3]]) -> Split {
     let faces = prim.faces.clone();
-    let mut map: HashMap<(u32, u32, u32), u32> = HashMap::with_capacity(faces.len() * 2);
+    // Per source vertex, a chain of the output vertices made from it so far (`head`, then
+    // `next`). Chains are as long as the number of distinct UVs at a vertex (a handful), so
+    // this is linear in the corners, without hashing, and deterministic.
+    const NONE: u32 = u32::MAX;
+    let mut head = vec![NONE; prim.vertex_count as usize];
+    let mut next: Vec<u32> = Vec::with_capacity(faces.len());
     let mut split = Split {
         source: Vec::with_capacity(faces.len()),
         uvs: Vec::with_capacity(faces.len()),
         indices: Vec::with_capacity(faces.len() * 3),
     };
     for f in faces {
-        let (Some(tri), Some(uvs)) = (triangles.get(f), corner_uvs.get(f)) else {
-            continue;
-        };
+        let (Some(tri), Some(uvs)) = (triangles.get(f), corner_uvs.get(f)) else { continue };
         for c in 0..3 {
             let local = tri[c].saturating_sub(prim.vertex_start);
             // +0.0 and -0.0 are the same UV: adding 0.0 turns -0.0 into +0.0.
             let uv = [uvs[c][0] + 0.0, uvs[c][1] + 0.0];
-            let key = (local, uv[0].to_bits(), uv[1].to_bits());
-            let next = split.source.len() as u32;
-            let vertex = *map.entry(key).or_insert(next);
-            if vertex == next {
+            let bits = [uv[0].to_bits(), uv[1].to_bits()];
+            let Some(slot) = head.get_mut(local as usize) else { continue };
+            let mut v = *slot;
+            while v != NONE {
+                let w = split.uvs[v as usize];
+                if [w[0].to_bits(), w[1].to_bits()] == bits {
+                    break;
+                }
+                v = next[v as usize];
+            }
+            if v == NONE {
+                v = split.source.len() as u32;
                 split.source.push(local);
                 split.uvs.push(uv);
+                next.push(*slot);
+                *slot = v;
             }
-            split.indices.push(vertex);
+            split.indices.push(v);
         }
     }
     split
