@@ -37,9 +37,9 @@ fn corpus_round_trips_through_the_evaluator_and_validator() {
     let corpus = PathBuf::from(corpus);
     // TEXATLAS_CORPUS_KEEP=DIR keeps the encoded files there for inspection.
     let keep = std::env::var_os("TEXATLAS_CORPUS_KEEP").map(PathBuf::from);
-    let out_dir = keep
-        .clone()
-        .unwrap_or_else(|| std::env::temp_dir().join(format!("texatlas-corpus-{}", std::process::id())));
+    let out_dir = keep.clone().unwrap_or_else(|| {
+        std::env::temp_dir().join(format!("texatlas-corpus-{}", std::process::id()))
+    });
     std::fs::create_dir_all(&out_dir).expect("temp dir");
     let mut files: Vec<PathBuf> = std::fs::read_dir(&corpus)
         .expect("corpus dir readable")

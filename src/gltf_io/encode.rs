@@ -342,7 +342,11 @@ struct Split {
     indices: Vec<u32>,
 }
 
-fn split_vertices(prim: &TrianglePrimitive, triangles: &[[u32; 3]], corner_uvs: &[[[f32; 2]; 3]]) -> Split {
+fn split_vertices(
+    prim: &TrianglePrimitive,
+    triangles: &[[u32; 3]],
+    corner_uvs: &[[[f32; 2]; 3]],
+) -> Split {
     let faces = prim.faces.clone();
     // Per source vertex, a chain of the output vertices made from it so far (`head`, then
     // `next`). Chains are as long as the number of distinct UVs at a vertex (a handful), so
@@ -356,13 +360,17 @@ fn split_vertices(prim: &TrianglePrimitive, triangles: &[[u32; 3]], corner_uvs: 
         indices: Vec::with_capacity(faces.len() * 3),
     };
     for f in faces {
-        let (Some(tri), Some(uvs)) = (triangles.get(f), corner_uvs.get(f)) else { continue };
+        let (Some(tri), Some(uvs)) = (triangles.get(f), corner_uvs.get(f)) else {
+            continue;
+        };
         for c in 0..3 {
             let local = tri[c].saturating_sub(prim.vertex_start);
             // +0.0 and -0.0 are the same UV: adding 0.0 turns -0.0 into +0.0.
             let uv = [uvs[c][0] + 0.0, uvs[c][1] + 0.0];
             let bits = [uv[0].to_bits(), uv[1].to_bits()];
-            let Some(slot) = head.get_mut(local as usize) else { continue };
+            let Some(slot) = head.get_mut(local as usize) else {
+                continue;
+            };
             let mut v = *slot;
             while v != NONE {
                 let w = split.uvs[v as usize];
