@@ -1,0 +1,589 @@
+//! `encode`: decoded [`Asset`] + per-corner UVs → the same asset with a new `TEXCOORD_k`.
+//!
+//! Purpose: write atlas UVs back into the asset and change nothing else.
+//!
+//! Invariants:
+//! - Vertices are split only where needed: a primitive gets one output vertex per distinct
+//!   (source vertex, UV bits) pair, numbered in order of first use by its corners, so the output
+//!   is deterministic. Every vertex attribute (NORMAL, TANGENT, COLOR_n, JOINTS_n, WEIGHTS_n,
+//!   existing TEXCOORD_n, custom `_FOO`) and every morph-target attribute is copied element by
+//!   element in its original componentType, normalized flag and layout (quantized stays
+//!   quantized), sparse substitution applied.
+//! - Triangle `i` of a primitive keeps its corners in the same order; strips and fans become
+//!   TRIANGLES lists in the decoder's triangle order. Indices are u16 when every index fits
+//!   below the primitive-restart value 65535, else u32.
+//! - The JSON tree is the input's, edited only at: the rewritten primitives' `attributes`,
+//!   `indices`, `targets`, `mode`; appended accessors and buffer views; `bufferViews[*].buffer`
+//!   / `byteOffset` (rebased into one buffer); `buffers` (one buffer); external images (now a
+//!   `bufferView` + `mimeType`). Existing accessors keep their indices and data, so skins,
+//!   animations and unknown extensions that reference them stay valid. The rewritten primitives'
+//!   old accessors stay in the file unused (size is traded for certainty that nothing else
+//!   referenced them).
+//! - Vertex-attribute elements are 4-byte aligned (a padded `byteStride` when an element is not
+//!   a multiple of 4 bytes), as the spec requires; `min`/`max` are recomputed for POSITION
+//!   (attribute and morph target) and wherever the source accessor had them.
+//!
+//! Units: UVs as given (normally [0,1]), written as float VEC2.
+//!
+//! References: glTF 2.0 spec §3.6.2.4 (data alignment), §3.6.2.5 (accessor bounds: min/max are
+//! raw values, `normalized` has no effect), §3.7.2.1 (primitive modes), §4.4 (GLB).
+use std::collections::HashMap;
+
+use base64::Engine as _;
+use serde_json::{json, Map, Value};
+
+use super::accessor::{array, AccessorLayout, ComponentType, Reader};
+use super::decode::{Asset, PrimitiveMode, TrianglePrimitive};
+use super::error::{ErrorCode, GltfError};
+use super::glb::write_glb;
+
+/// Which `TEXCOORD_k` receives the atlas UVs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum UvTarget {
+    /// `k = 0` when the primitive has no UVs, else the smallest unused index (the lightmap
+    /// convention). The default.
+    #[default]
+    FirstFree,
+    /// Replace `TEXCOORD_k` (its morph-target displacements are dropped too, since they would
+    /// move the atlas UVs). If the primitive lacks it, `k` must be its first free index, so no
+    /// gap appears in the set numbering.
+    Replace(u32),
+}
+
+/// The container to write.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum OutputFormat {
+    /// Binary `.glb` with every buffer and external image in the BIN chunk. The default.
+    #[default]
+    Glb,
+    /// JSON `.gltf` with one `data:` (base64) buffer.
+    Gltf,
+}
+
+/// Options of [`encode`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct EncodeOptions {
+    /// Where the UVs go. Default: [`UvTarget::FirstFree`].
+    pub uv_target: UvTarget,
+    /// Output container. Default: [`OutputFormat::Glb`].
+    pub format: OutputFormat,
+}
+
+/// The encoded asset.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EncodedAsset {
+    /// The file.
+    pub bytes: Vec<u8>,
+    /// The `k` of the `TEXCOORD_k` written, per [`Asset::triangle_primitives`] entry.
+    pub uv_set_per_primitive: Vec<u32>,
+}
+
+impl EncodedAsset {
+    /// The one UV set written to every triangle primitive, or `None` if they differ (or there
+    /// are no triangle primitives).
+    pub fn common_uv_set(&self) -> Option<u32> {
+        let first = *self.uv_set_per_primitive.first()?;
+        self.uv_set_per_primitive
+            .iter()
+            .all(|&k| k == first)
+            .then_some(first)
+    }
+}
+
+/// Writes `corner_uvs` (`corner_uvs[f]` = UVs of the 3 corners of `asset.mesh_input()` face `f`,
+/// in corner order) into the asset. See the module doc for what changes and what does not.
+///
+/// Cost: copies every buffer once, reads every attribute of every triangle primitive once and
+/// writes it split; memory about 2× the asset plus the split vertex data.
+pub fn encode(
+    asset: &Asset,
+    corner_uvs: &[[[f32; 2]; 3]],
+    options: &EncodeOptions,
+) -> Result<EncodedAsset, GltfError> {
+    let faces = asset.mesh_input.triangles.len();
+    if corner_uvs.len() != faces {
+        return Err(GltfError::new(
+            ErrorCode::UvInput,
+            "",
+            format!(
+                "got UVs for {} faces, the asset has {faces}",
+                corner_uvs.len()
+            ),
+            "pass one [[u, v]; 3] per face of Asset::mesh_input(), in face order",
+        ));
+    }
+    if let Some(f) = corner_uvs
+        .iter()
+        .position(|t| t.iter().flatten().any(|x| !x.is_finite()))
+    {
+        return Err(GltfError::new(
+            ErrorCode::UvInput,
+            "",
+            format!("face {f} has a non-finite UV {:?}", corner_uvs[f]),
+            "the atlas must produce finite UVs",
+        ));
+    }
+    let targets = asset
+        .primitives
+        .iter()
+        .map(|p| uv_set_for(p, options.uv_target))
+        .collect::<Result<Vec<u32>, GltfError>>()?;
+
+    let mut json = asset.json.clone();
+    let mut out = Output::default();
+
+    // 1. One buffer: the original buffers back to back, buffer views rebased.
+    let mut bases = Vec::with_capacity(asset.buffers.len());
+    for buffer in &asset.buffers {
+        out.align();
+        bases.push(out.bin.len() as u64);
+        out.bin.extend_from_slice(buffer);
+    }
+    if let Some(views) = json.get_mut("bufferViews").and_then(Value::as_array_mut) {
+        for view in views {
+            let buffer = view.get("buffer").and_then(Value::as_u64).unwrap_or(0) as usize;
+            let offset = view.get("byteOffset").and_then(Value::as_u64).unwrap_or(0);
+            let base = bases.get(buffer).copied().unwrap_or(0);
+            if let Some(view) = view.as_object_mut() {
+                view.insert("buffer".into(), json!(0));
+                if base + offset != 0 || view.contains_key("byteOffset") {
+                    view.insert("byteOffset".into(), json!(base + offset));
+                }
+            }
+        }
+    }
+    out.view_count = array(&json, "bufferViews").len();
+    out.accessor_count = array(&json, "accessors").len();
+
+    // 2. External images move into the buffer.
+    for image in &asset.external_images {
+        let view = out.push_view(&image.bytes, None, None);
+        let path = format!("/images/{}", image.index);
+        let Some(obj) = json.pointer_mut(&path).and_then(Value::as_object_mut) else {
+            continue;
+        };
+        if !obj.contains_key("mimeType") {
+            let mime = sniff_image(&image.bytes).ok_or_else(|| {
+                GltfError::new(
+                    ErrorCode::ImageFormat,
+                    format!("{path}/uri"),
+                    "the supplied image is not PNG, JPEG, WebP or KTX2 and has no mimeType",
+                    "add a mimeType to the image or convert it to PNG/JPEG",
+                )
+            })?;
+            obj.insert("mimeType".into(), json!(mime));
+        }
+        obj.remove("uri");
+        obj.insert("bufferView".into(), json!(view));
+    }
+
+    // 3. Rewrite every triangle primitive.
+    let reader = Reader::new(&asset.json, &asset.buffers, &asset.limits)?;
+    let mut packed_cache: HashMap<usize, Vec<u8>> = HashMap::new();
+    for (prim, &uv_set) in asset.primitives.iter().zip(&targets) {
+        let path = format!(
+            "/meshes/{}/primitives/{}",
+            prim.mesh_index, prim.primitive_index
+        );
+        let source_prim = asset.json.pointer(&path).cloned().unwrap_or(Value::Null);
+        let split = split_vertices(prim, &asset.mesh_input.triangles, corner_uvs);
+        let uv_name = format!("TEXCOORD_{uv_set}");
+
+        let mut gather =
+            |name: &str, index: u64, ref_path: &str, out: &mut Output| -> Result<u64, GltfError> {
+                let layout = reader.layout(index, ref_path)?;
+                if !packed_cache.contains_key(&layout.index) {
+                    let packed = reader.read_packed(layout)?;
+                    packed_cache.insert(layout.index, packed);
+                }
+                let packed = packed_cache
+                    .get(&layout.index)
+                    .map(Vec::as_slice)
+                    .unwrap_or(&[]);
+                let source_json = asset.json.pointer(&format!("/accessors/{}", layout.index));
+                let with_bounds =
+                    name == "POSITION" || source_json.is_some_and(|a| a.get("min").is_some());
+                Ok(out.push_gathered(layout, packed, &split.source, with_bounds, source_json))
+            };
+
+        let mut attributes = Map::new();
+        let mut wrote_uv = false;
+        if let Some(source) = source_prim.get("attributes").and_then(Value::as_object) {
+            for (name, value) in source {
+                let index = value.as_u64().unwrap_or(u64::MAX);
+                if *name == uv_name {
+                    attributes.insert(name.clone(), json!(out.push_uvs(&split.uvs)));
+                    wrote_uv = true;
+                } else {
+                    let new = gather(name, index, &format!("{path}/attributes/{name}"), &mut out)?;
+                    attributes.insert(name.clone(), json!(new));
+                }
+            }
+        }
+        if !wrote_uv {
+            attributes.insert(uv_name.clone(), json!(out.push_uvs(&split.uvs)));
+        }
+        let mut new_targets = Vec::new();
+        for (t, target) in array(&source_prim, "targets").iter().enumerate() {
+            let mut new_target = Map::new();
+            if let Some(target) = target.as_object() {
+                for (name, value) in target {
+                    if *name == uv_name {
+                        continue;
+                    }
+                    let index = value.as_u64().unwrap_or(u64::MAX);
+                    let new = gather(name, index, &format!("{path}/targets/{t}/{name}"), &mut out)?;
+                    new_target.insert(name.clone(), json!(new));
+                }
+            }
+            new_targets.push(Value::Object(new_target));
+        }
+        let indices = out.push_indices(&split.indices, split.source.len());
+
+        let Some(obj) = json.pointer_mut(&path).and_then(Value::as_object_mut) else {
+            return Err(GltfError::new(
+                ErrorCode::Internal,
+                path,
+                "primitive vanished",
+                "report this bug",
+            ));
+        };
+        obj.insert("attributes".into(), Value::Object(attributes));
+        obj.insert("indices".into(), json!(indices));
+        if obj.contains_key("mode") || prim.mode != PrimitiveMode::Triangles {
+            obj.insert("mode".into(), json!(4));
+        }
+        if obj.contains_key("targets") {
+            obj.insert("targets".into(), Value::Array(new_targets));
+        }
+    }
+    drop(reader);
+
+    // 4. Append the new views and accessors, write the one buffer.
+    append(&mut json, "bufferViews", std::mem::take(&mut out.views));
+    append(&mut json, "accessors", std::mem::take(&mut out.accessors));
+    out.align();
+    let bin = out.bin;
+    let first_buffer = array(&asset.json, "buffers")
+        .first()
+        .and_then(Value::as_object)
+        .cloned();
+    if bin.is_empty() {
+        if let Some(root) = json.as_object_mut() {
+            root.remove("buffers");
+        }
+    } else {
+        let mut buffer = Map::new();
+        if options.format == OutputFormat::Gltf {
+            let encoded = base64::engine::general_purpose::STANDARD.encode(&bin);
+            buffer.insert(
+                "uri".into(),
+                json!(format!("data:application/octet-stream;base64,{encoded}")),
+            );
+        }
+        buffer.insert("byteLength".into(), json!(bin.len()));
+        // Keep the first buffer's name, extras and extensions.
+        for (key, value) in first_buffer.into_iter().flatten() {
+            if key != "uri" && key != "byteLength" {
+                buffer.insert(key, value);
+            }
+        }
+        if let Some(root) = json.as_object_mut() {
+            root.insert("buffers".into(), json!([Value::Object(buffer)]));
+        }
+    }
+    let json_bytes = serde_json::to_vec(&json).map_err(|e| {
+        GltfError::new(
+            ErrorCode::Internal,
+            "",
+            format!("JSON serialisation failed: {e}"),
+            "report this bug",
+        )
+    })?;
+    let bytes = match options.format {
+        OutputFormat::Glb => write_glb(&json_bytes, &bin)?,
+        OutputFormat::Gltf => json_bytes,
+    };
+    Ok(EncodedAsset {
+        bytes,
+        uv_set_per_primitive: targets,
+    })
+}
+
+fn uv_set_for(prim: &TrianglePrimitive, target: UvTarget) -> Result<u32, GltfError> {
+    let first_free = (0u32..)
+        .find(|k| !prim.texcoord_sets.contains(k))
+        .unwrap_or(0);
+    match target {
+        UvTarget::FirstFree => Ok(first_free),
+        UvTarget::Replace(k) if prim.texcoord_sets.contains(&k) || k == first_free => Ok(k),
+        UvTarget::Replace(k) => Err(GltfError::new(
+            ErrorCode::UvTarget,
+            format!(
+                "/meshes/{}/primitives/{}/attributes",
+                prim.mesh_index, prim.primitive_index
+            ),
+            format!(
+                "cannot write TEXCOORD_{k}: the primitive has sets {:?}, so it would leave a gap",
+                prim.texcoord_sets
+            ),
+            format!("replace an existing set or use TEXCOORD_{first_free}"),
+        )),
+    }
+}
+
+/// The split vertices of one primitive.
+struct Split {
+    /// Source vertex (local to the primitive) of each output vertex.
+    source: Vec<u32>,
+    /// UV of each output vertex.
+    uvs: Vec<[f32; 2]>,
+    /// Three output vertices per face.
+    indices: Vec<u32>,
+}
+
+fn split_vertices(
+    prim: &TrianglePrimitive,
+    triangles: &[[u32; 3]],
+    corner_uvs: &[[[f32; 2]; 3]],
+) -> Split {
+    let faces = prim.faces.clone();
+    // Per source vertex, a chain of the output vertices made from it so far (`head`, then
+    // `next`). Chains are as long as the number of distinct UVs at a vertex (a handful), so
+    // this is linear in the corners, without hashing, and deterministic.
+    const NONE: u32 = u32::MAX;
+    let mut head = vec![NONE; prim.vertex_count as usize];
+    let mut next: Vec<u32> = Vec::with_capacity(faces.len());
+    let mut split = Split {
+        source: Vec::with_capacity(faces.len()),
+        uvs: Vec::with_capacity(faces.len()),
+        indices: Vec::with_capacity(faces.len() * 3),
+    };
+    for f in faces {
+        let (Some(tri), Some(uvs)) = (triangles.get(f), corner_uvs.get(f)) else {
+            continue;
+        };
+        for c in 0..3 {
+            let local = tri[c].saturating_sub(prim.vertex_start);
+            // +0.0 and -0.0 are the same UV: adding 0.0 turns -0.0 into +0.0.
+            let uv = [uvs[c][0] + 0.0, uvs[c][1] + 0.0];
+            let bits = [uv[0].to_bits(), uv[1].to_bits()];
+            let Some(slot) = head.get_mut(local as usize) else {
+                continue;
+            };
+            let mut v = *slot;
+            while v != NONE {
+                let w = split.uvs[v as usize];
+                if [w[0].to_bits(), w[1].to_bits()] == bits {
+                    break;
+                }
+                v = next[v as usize];
+            }
+            if v == NONE {
+                v = split.source.len() as u32;
+                split.source.push(local);
+                split.uvs.push(uv);
+                next.push(*slot);
+                *slot = v;
+            }
+            split.indices.push(v);
+        }
+    }
+    split
+}
+
+fn append(json: &mut Value, key: &str, items: Vec<Value>) {
+    if items.is_empty() {
+        return;
+    }
+    if let Some(root) = json.as_object_mut() {
+        match root.get_mut(key).and_then(Value::as_array_mut) {
+            Some(existing) => existing.extend(items),
+            None => {
+                root.insert(key.into(), Value::Array(items));
+            }
+        }
+    }
+}
+
+fn sniff_image(bytes: &[u8]) -> Option<&'static str> {
+    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+        Some("image/png")
+    } else if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
+        Some("image/jpeg")
+    } else if bytes.len() >= 12 && &bytes[0..4] == b"RIFF" && &bytes[8..12] == b"WEBP" {
+        Some("image/webp")
+    } else if bytes.starts_with(b"\xABKTX 20\xBB\r\n\x1A\n") {
+        Some("image/ktx2")
+    } else {
+        None
+    }
+}
+
+/// The growing BIN buffer and the views/accessors appended to the document.
+#[derive(Default)]
+struct Output {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+    /// Views/accessors already in the document (new ones are numbered after them).
+    view_count: usize,
+    accessor_count: usize,
+}
+
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+
+impl Output {
+    fn align(&mut self) {
+        self.bin.resize(self.bin.len().div_ceil(4) * 4, 0);
+    }
+
+    fn push_view(&mut self, bytes: &[u8], stride: Option<usize>, target: Option<u32>) -> usize {
+        self.align();
+        let mut view = Map::new();
+        view.insert("buffer".into(), json!(0));
+        view.insert("byteOffset".into(), json!(self.bin.len()));
+        view.insert("byteLength".into(), json!(bytes.len()));
+        if let Some(stride) = stride {
+            view.insert("byteStride".into(), json!(stride));
+        }
+        if let Some(target) = target {
+            view.insert("target".into(), json!(target));
+        }
+        self.bin.extend_from_slice(bytes);
+        self.views.push(Value::Object(view));
+        self.view_count + self.views.len() - 1
+    }
+
+    fn push_accessor(&mut self, accessor: Map<String, Value>) -> u64 {
+        self.accessors.push(Value::Object(accessor));
+        (self.accessor_count + self.accessors.len() - 1) as u64
+    }
+
+    /// Writes `source.len()` elements of `layout`, element `i` = source element `source[i]`.
+    fn push_gathered(
+        &mut self,
+        layout: &AccessorLayout,
+        packed: &[u8],
+        source: &[u32],
+        with_bounds: bool,
+        source_json: Option<&Value>,
+    ) -> u64 {
+        let es = layout.element_size;
+        // Vertex attribute elements must start on 4-byte boundaries (spec §3.6.2.4).
+        let stride = es.div_ceil(4) * 4;
+        let mut data = Vec::with_capacity(source.len() * stride);
+        for &s in source {
+            let at = s as usize * es;
+            data.extend_from_slice(packed.get(at..at + es).unwrap_or(&[]));
+            data.resize(data.len().div_ceil(4) * 4, 0);
+        }
+        let view = self.push_view(&data, (stride != es).then_some(stride), Some(ARRAY_BUFFER));
+        let mut accessor = Map::new();
+        accessor.insert("bufferView".into(), json!(view));
+        accessor.insert("componentType".into(), json!(layout.component_type.gl()));
+        if layout.normalized {
+            accessor.insert("normalized".into(), json!(true));
+        }
+        accessor.insert("count".into(), json!(source.len()));
+        accessor.insert("type".into(), json!(layout.kind));
+        if with_bounds && !source.is_empty() {
+            if let Some((min, max)) = bounds(layout, &data, stride, source.len()) {
+                accessor.insert("max".into(), Value::Array(max));
+                accessor.insert("min".into(), Value::Array(min));
+            }
+        }
+        for key in ["name", "extensions", "extras"] {
+            if let Some(value) = source_json.and_then(|a| a.get(key)) {
+                accessor.insert(key.into(), value.clone());
+            }
+        }
+        self.push_accessor(accessor)
+    }
+
+    fn push_uvs(&mut self, uvs: &[[f32; 2]]) -> u64 {
+        let mut data = Vec::with_capacity(uvs.len() * 8);
+        for uv in uvs {
+            data.extend_from_slice(&uv[0].to_le_bytes());
+            data.extend_from_slice(&uv[1].to_le_bytes());
+        }
+        let view = self.push_view(&data, None, Some(ARRAY_BUFFER));
+        let mut accessor = Map::new();
+        accessor.insert("bufferView".into(), json!(view));
+        accessor.insert("componentType".into(), json!(ComponentType::F32.gl()));
+        accessor.insert("count".into(), json!(uvs.len()));
+        accessor.insert("type".into(), json!("VEC2"));
+        self.push_accessor(accessor)
+    }
+
+    fn push_indices(&mut self, indices: &[u32], vertex_count: usize) -> u64 {
+        // 65535 is the primitive-restart value and must not appear in u16 indices.
+        let (component, data) = if vertex_count <= 65535 {
+            (
+                ComponentType::U16,
+                indices
+                    .iter()
+                    .flat_map(|&i| (i as u16).to_le_bytes())
+                    .collect::<Vec<u8>>(),
+            )
+        } else {
+            (
+                ComponentType::U32,
+                indices
+                    .iter()
+                    .flat_map(|&i| i.to_le_bytes())
+                    .collect::<Vec<u8>>(),
+            )
+        };
+        let view = self.push_view(&data, None, Some(ELEMENT_ARRAY_BUFFER));
+        let mut accessor = Map::new();
+        accessor.insert("bufferView".into(), json!(view));
+        accessor.insert("componentType".into(), json!(component.gl()));
+        accessor.insert("count".into(), json!(indices.len()));
+        accessor.insert("type".into(), json!("SCALAR"));
+        self.push_accessor(accessor)
+    }
+}
+
+/// Per-component raw min and max (spec §3.6.2.5: `normalized` has no effect on them); `None`
+/// when a component has no finite value (then no bounds are written).
+fn bounds(
+    layout: &AccessorLayout,
+    data: &[u8],
+    stride: usize,
+    count: usize,
+) -> Option<(Vec<Value>, Vec<Value>)> {
+    let size = layout.component_type.size();
+    let mut min = vec![f64::INFINITY; layout.components];
+    let mut max = vec![f64::NEG_INFINITY; layout.components];
+    for i in 0..count {
+        for c in 0..layout.components {
+            let at = i * stride + layout.component_offset(c);
+            let v = layout
+                .component_type
+                .raw(data.get(at..at + size).unwrap_or(&[]));
+            // NaN (possible in non-POSITION float attributes) is skipped, as the validator does.
+            if v < min[c] {
+                min[c] = v;
+            }
+            if v > max[c] {
+                max[c] = v;
+            }
+        }
+    }
+    if !min.iter().chain(&max).all(|v| v.is_finite()) {
+        return None;
+    }
+    let to_json = |v: f64| -> Value {
+        if layout.component_type == ComponentType::F32 {
+            json!(v)
+        } else {
+            json!(v as i64)
+        }
+    };
+    Some((
+        min.into_iter().map(to_json).collect(),
+        max.into_iter().map(to_json).collect(),
+    ))
+}

@@ -1,0 +1,139 @@
+//! Corpus round trip: for every `.glb` in `$TEXATLAS_CORPUS_DIR`, decode, assign seam-creating
+//! test UVs, encode, and check with the independent evaluator
+//! (`$TEXATLAS_EVAL_DIR/atlas_eval.py --input IN --uv K --json` → `roundtrip.ok == true`) and,
+//! when `$TEXATLAS_GLTF_VALIDATOR` names a node_modules dir with gltf-validator, with the Khronos
+//! validator (0 errors). Skipped (with a message) when `TEXATLAS_CORPUS_DIR` is unset.
+//! `TEXATLAS_CORPUS_ONLY=substr` restricts the run to matching file names.
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use texatlas::gltf_io::{decode, encode, DecodeLimits, EncodeOptions, Resources};
+
+/// Deterministic per-corner UVs that create seams: each face gets its own small square cell,
+/// corners placed by corner slot, so no two faces share a UV and every edge is a seam.
+fn test_uvs(faces: usize) -> Vec<[[f32; 2]; 3]> {
+    let side = (faces as f64).sqrt().ceil().max(1.0) as usize;
+    let cell = 1.0 / side as f32;
+    (0..faces)
+        .map(|f| {
+            let (x, y) = ((f % side) as f32 * cell, (f / side) as f32 * cell);
+            [[x, y], [x + 0.9 * cell, y], [x, y + 0.9 * cell]]
+        })
+        .collect()
+}
+
+fn eval_dir() -> PathBuf {
+    std::env::var_os("TEXATLAS_EVAL_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("../shared/eval"))
+}
+
+#[test]
+fn corpus_round_trips_through_the_evaluator_and_validator() {
+    let Some(corpus) = std::env::var_os("TEXATLAS_CORPUS_DIR") else {
+        println!("corpus_roundtrip: skipped (TEXATLAS_CORPUS_DIR is unset)");
+        return;
+    };
+    let corpus = PathBuf::from(corpus);
+    // TEXATLAS_CORPUS_KEEP=DIR keeps the encoded files there for inspection.
+    let keep = std::env::var_os("TEXATLAS_CORPUS_KEEP").map(PathBuf::from);
+    let out_dir = keep.clone().unwrap_or_else(|| {
+        std::env::temp_dir().join(format!("texatlas-corpus-{}", std::process::id()))
+    });
+    std::fs::create_dir_all(&out_dir).expect("temp dir");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&corpus)
+        .expect("corpus dir readable")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "glb"))
+        .collect();
+    files.sort();
+    assert!(!files.is_empty(), "no .glb in {}", corpus.display());
+    let only = std::env::var("TEXATLAS_CORPUS_ONLY").ok();
+    let mut failures = Vec::new();
+    for input in &files {
+        let name = input
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or("?")
+            .to_string();
+        if only.as_deref().is_some_and(|o| !name.contains(o)) {
+            continue;
+        }
+        match check_file(input, &out_dir.join(&name)) {
+            Ok(line) => println!("{name}: {line}"),
+            Err(why) => {
+                println!("{name}: FAIL {why}");
+                failures.push(format!("{name}: {why}"));
+            }
+        }
+    }
+    if keep.is_none() {
+        let _ = std::fs::remove_dir_all(&out_dir);
+    }
+    assert!(
+        failures.is_empty(),
+        "corpus failures:\n{}",
+        failures.join("\n")
+    );
+}
+
+fn check_file(input: &Path, output: &Path) -> Result<String, String> {
+    let bytes = std::fs::read(input).map_err(|e| e.to_string())?;
+    let asset =
+        decode(&bytes, &Resources::new(), &DecodeLimits::default()).map_err(|e| e.to_string())?;
+    let faces = asset.mesh_input().triangles.len();
+    let encoded =
+        encode(&asset, &test_uvs(faces), &EncodeOptions::default()).map_err(|e| e.to_string())?;
+    let k = encoded.common_uv_set().ok_or_else(|| {
+        format!(
+            "UV sets differ between primitives: {:?}",
+            encoded.uv_set_per_primitive
+        )
+    })?;
+    std::fs::write(output, &encoded.bytes).map_err(|e| e.to_string())?;
+    let eval = Command::new("python3")
+        .arg(eval_dir().join("atlas_eval.py"))
+        .arg(output)
+        .args(["--input"])
+        .arg(input)
+        .args(["--uv", &k.to_string(), "--json", "--resolution", "64"])
+        .output()
+        .map_err(|e| format!("cannot run python3: {e}"))?;
+    let report: serde_json::Value = serde_json::from_slice(&eval.stdout).map_err(|e| {
+        format!(
+            "evaluator output is not JSON ({e}); stderr: {}",
+            String::from_utf8_lossy(&eval.stderr)
+        )
+    })?;
+    if report.pointer("/roundtrip/ok") != Some(&serde_json::Value::Bool(true)) {
+        return Err(format!(
+            "roundtrip not ok: {}",
+            report.get("roundtrip").cloned().unwrap_or_default()
+        ));
+    }
+    let mut line = format!("{faces} triangles, TEXCOORD_{k}, roundtrip ok");
+    if let Some(node_modules) = std::env::var_os("TEXATLAS_GLTF_VALIDATOR") {
+        let v = Command::new("node")
+            .env("NODE_PATH", node_modules)
+            .arg(eval_dir().join("gltf_validate.js"))
+            .arg(output)
+            .output()
+            .map_err(|e| format!("cannot run node: {e}"))?;
+        let report: serde_json::Value = serde_json::from_slice(&v.stdout).map_err(|e| {
+            format!(
+                "validator output is not JSON ({e}); stderr: {}",
+                String::from_utf8_lossy(&v.stderr)
+            )
+        })?;
+        let errors = report.get("errors").and_then(serde_json::Value::as_u64);
+        if errors != Some(0) {
+            return Err(format!("validator: {report}"));
+        }
+        let warnings = report
+            .get("warnings")
+            .and_then(serde_json::Value::as_u64)
+            .unwrap_or(0);
+        line.push_str(&format!(", validator 0 errors / {warnings} warnings"));
+    }
+    Ok(line)
+}

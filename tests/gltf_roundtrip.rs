@@ -1,0 +1,873 @@
+//! Round trips through `gltf_io`: decode → deterministic seam-creating corner UVs → encode →
+//! check with an independent reader (`gltf_common`) that every corner keeps its position and
+//! every attribute / morph-target value, that the UV set lands where expected, that vertices
+//! are split only where the UVs differ, and that everything outside the rewritten primitives is
+//! unchanged.
+mod gltf_common;
+
+use std::collections::BTreeSet;
+
+use gltf_common::{parse, Builder, Doc};
+use serde_json::{json, Value};
+use texatlas::gltf_io::{
+    decode, encode, Asset, DecodeLimits, EncodeOptions, ErrorCode, OutputFormat, PrimitiveMode,
+    Resources, SourceFormat, UvTarget,
+};
+
+fn fixture(name: &str) -> Vec<u8> {
+    let path = format!("{}/tests/fixtures/{name}", env!("CARGO_MANIFEST_DIR"));
+    std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
+/// Seam-creating test UVs: a per-vertex UV, shifted by (0.25, 0) on every third face, so some
+/// edges are seams and the rest share UVs.
+fn test_uvs(asset: &Asset) -> Vec<[[f32; 2]; 3]> {
+    asset
+        .mesh_input()
+        .triangles
+        .iter()
+        .enumerate()
+        .map(|(f, t)| {
+            t.map(|v| {
+                let base = [(v as f32 * 0.618_034) % 1.0, (v as f32 * 0.377_1) % 1.0];
+                if f % 3 == 0 {
+                    [base[0] * 0.5 + 0.25, base[1]]
+                } else {
+                    base
+                }
+            })
+        })
+        .collect()
+}
+
+/// Top-level keys `encode` may change; everything else must be JSON-equal.
+const REWRITTEN: [&str; 5] = ["meshes", "accessors", "bufferViews", "buffers", "images"];
+
+/// Checks one encoded output against its input with the independent reader.
+fn check_round_trip(
+    input: &Doc,
+    asset: &Asset,
+    uvs: &[[[f32; 2]; 3]],
+    output: &[u8],
+    uv_sets: &[u32],
+    replaced: bool,
+) {
+    let out = parse(output);
+    // 1. Untouched top-level properties.
+    for (key, value) in input.json.as_object().expect("object") {
+        if !REWRITTEN.contains(&key.as_str()) {
+            assert_eq!(out.json.get(key), Some(value), "top-level `{key}` changed");
+        }
+    }
+    // 2. Existing accessors keep their index, JSON (except the rebased view) and data.
+    let in_accessors = input.json["accessors"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default();
+    for (i, a) in in_accessors.iter().enumerate() {
+        assert_eq!(a, &out.json["accessors"][i], "accessor {i} JSON changed");
+        assert_eq!(
+            input.elements(i),
+            out.elements(i),
+            "accessor {i} data changed"
+        );
+    }
+    // 3. Images keep every property (external ones may have gained bufferView/mimeType).
+    for (i, image) in input.json["images"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default()
+        .iter()
+        .enumerate()
+    {
+        for (key, value) in image.as_object().expect("image") {
+            if key != "uri" || value.as_str().is_some_and(|u| u.starts_with("data:")) {
+                assert_eq!(
+                    &out.json["images"][i][key], value,
+                    "images/{i}/{key} changed"
+                );
+            }
+        }
+    }
+    // 4. Meshes: triangle primitives carry every corner value; the rest is unchanged.
+    let mut tri_index = 0;
+    for (m, mesh) in input.json["meshes"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default()
+        .iter()
+        .enumerate()
+    {
+        let out_mesh = &out.json["meshes"][m];
+        for (key, value) in mesh.as_object().expect("mesh") {
+            if key != "primitives" {
+                assert_eq!(&out_mesh[key], value, "meshes/{m}/{key} changed");
+            }
+        }
+        for (p, prim) in mesh["primitives"]
+            .as_array()
+            .expect("primitives")
+            .iter()
+            .enumerate()
+        {
+            let out_prim = &out_mesh["primitives"][p];
+            let mode = prim.get("mode").and_then(Value::as_u64).unwrap_or(4);
+            if mode < 4 {
+                assert_eq!(out_prim, prim, "points/lines primitive {m}/{p} changed");
+                continue;
+            }
+            for (key, value) in prim.as_object().expect("prim") {
+                if !["attributes", "indices", "targets", "mode"].contains(&key.as_str()) {
+                    assert_eq!(
+                        &out_prim[key], value,
+                        "meshes/{m}/primitives/{p}/{key} changed"
+                    );
+                }
+            }
+            assert_eq!(
+                out_prim.get("mode").and_then(Value::as_u64).unwrap_or(4),
+                4,
+                "not a list"
+            );
+            let k = uv_sets[tri_index];
+            let uv_name = format!("TEXCOORD_{k}");
+            let before = input.corner_attributes(prim);
+            let after = out.corner_attributes(out_prim);
+            for (key, values) in &before {
+                let is_replaced_uv = key == &uv_name || key.ends_with(&format!("/{uv_name}"));
+                if replaced && is_replaced_uv {
+                    continue;
+                }
+                assert!(!is_replaced_uv, "FirstFree wrote over existing {key}");
+                assert_eq!(
+                    after.get(key),
+                    Some(values),
+                    "corner values of {key} differ in {m}/{p}"
+                );
+            }
+            // The UV set holds exactly the given UVs, corner by corner.
+            let faces = asset.face_range(tri_index).expect("primitive");
+            let expected: Vec<[f32; 2]> = uvs[faces.clone()]
+                .iter()
+                .flatten()
+                .map(|uv| [uv[0] + 0.0, uv[1] + 0.0])
+                .collect();
+            let uv_accessor = out_prim["attributes"][&uv_name]
+                .as_u64()
+                .expect("UV set written") as usize;
+            let written = out.floats(uv_accessor);
+            let corners = out.corners(out_prim);
+            let got: Vec<[f32; 2]> = corners
+                .iter()
+                .flatten()
+                .map(|&v| [written[v][0], written[v][1]])
+                .collect();
+            assert_eq!(got, expected, "UVs of {m}/{p}");
+            // Split only where needed: one vertex per distinct (source vertex, UV).
+            let t = asset.mesh_input();
+            let distinct: BTreeSet<(u32, u32, u32)> = t.triangles[faces.clone()]
+                .iter()
+                .zip(&uvs[faces])
+                .flat_map(|(tri, uv)| {
+                    (0..3).map(move |c| {
+                        (
+                            tri[c],
+                            (uv[c][0] + 0.0).to_bits(),
+                            (uv[c][1] + 0.0).to_bits(),
+                        )
+                    })
+                })
+                .collect();
+            assert_eq!(
+                written.len(),
+                distinct.len(),
+                "vertex count of {m}/{p} is not minimal"
+            );
+            tri_index += 1;
+        }
+    }
+    assert_eq!(tri_index, asset.triangle_primitives().len());
+}
+
+/// decode → UVs → encode → independent check → decode again (same triangles, same positions).
+fn round_trip(
+    bytes: &[u8],
+    resources: &Resources,
+    options: EncodeOptions,
+) -> (Asset, Vec<u8>, Vec<u32>) {
+    let asset = decode(bytes, resources, &DecodeLimits::default()).expect("decodes");
+    let uvs = test_uvs(&asset);
+    let encoded = encode(&asset, &uvs, &options).expect("encodes");
+    let input = match asset.source_format() {
+        SourceFormat::Glb => parse(bytes),
+        SourceFormat::Gltf => {
+            // Resolve the external buffer for the reference reader.
+            let mut doc = parse(&glb_of(bytes, resources));
+            doc.json["buffers"] = json!([{"byteLength": doc.buffers[0].len()}]);
+            doc
+        }
+    };
+    let replaced = matches!(options.uv_target, UvTarget::Replace(_));
+    check_round_trip(
+        &input,
+        &asset,
+        &uvs,
+        &encoded.bytes,
+        &encoded.uv_set_per_primitive,
+        replaced,
+    );
+    let again = decode(&encoded.bytes, &Resources::new(), &DecodeLimits::default())
+        .expect("output decodes");
+    let (a, b) = (asset.mesh_input(), again.mesh_input());
+    assert_eq!(a.triangles.len(), b.triangles.len());
+    for (ta, tb) in a.triangles.iter().zip(&b.triangles) {
+        for c in 0..3 {
+            assert_eq!(a.positions_m[ta[c] as usize], b.positions_m[tb[c] as usize]);
+        }
+    }
+    (asset, encoded.bytes, encoded.uv_set_per_primitive)
+}
+
+/// Wraps a `.gltf` with one external buffer into a GLB for the reference reader.
+fn glb_of(gltf: &[u8], resources: &Resources) -> Vec<u8> {
+    let mut json: Value = serde_json::from_slice(gltf).expect("json");
+    let uri = json["buffers"][0]["uri"].as_str().expect("uri").to_string();
+    let bin = resources.get(&uri).expect("supplied").to_vec();
+    json["buffers"][0]
+        .as_object_mut()
+        .expect("obj")
+        .remove("uri");
+    gltf_common::glb_bytes(&serde_json::to_vec(&json).expect("json"), &bin)
+}
+
+#[test]
+fn corpus_fixtures_round_trip() {
+    for name in [
+        "Box.glb",
+        "BoxInterleaved.glb",
+        "SimpleSkin.glb",
+        "AnimatedMorphCube.glb",
+        "SimpleSparseAccessor.glb",
+        "Mesh_PrimitiveMode_04_strip.glb",
+        "Mesh_PrimitiveMode_05_fan.glb",
+    ] {
+        let (asset, out, sets) =
+            round_trip(&fixture(name), &Resources::new(), EncodeOptions::default());
+        assert!(!asset.triangle_primitives().is_empty(), "{name}");
+        assert!(
+            sets.iter().all(|&k| k == 0),
+            "{name}: {sets:?} (none has UVs)"
+        );
+        let doc = parse(&out);
+        assert_eq!(
+            doc.json["buffers"].as_array().map(Vec::len),
+            Some(1),
+            "{name}: one buffer"
+        );
+    }
+}
+
+#[test]
+fn skins_animations_morph_targets_survive() {
+    let (_, out, _) = round_trip(
+        &fixture("SimpleSkin.glb"),
+        &Resources::new(),
+        EncodeOptions::default(),
+    );
+    let doc = parse(&out);
+    assert_eq!(doc.json["skins"].as_array().map(Vec::len), Some(1));
+    assert_eq!(doc.json["animations"].as_array().map(Vec::len), Some(1));
+    let prim = &doc.json["meshes"][0]["primitives"][0]["attributes"];
+    assert!(prim.get("JOINTS_0").is_some() && prim.get("WEIGHTS_0").is_some());
+
+    let (_, out, _) = round_trip(
+        &fixture("AnimatedMorphCube.glb"),
+        &Resources::new(),
+        EncodeOptions::default(),
+    );
+    let doc = parse(&out);
+    assert_eq!(
+        doc.json["meshes"][0]["primitives"][0]["targets"]
+            .as_array()
+            .map(Vec::len),
+        Some(2)
+    );
+    assert!(doc.json["animations"]
+        .as_array()
+        .is_some_and(|a| !a.is_empty()));
+}
+
+#[test]
+fn strip_and_fan_expand_in_spec_order() {
+    for (name, mode) in [
+        (
+            "Mesh_PrimitiveMode_04_strip.glb",
+            PrimitiveMode::TriangleStrip,
+        ),
+        ("Mesh_PrimitiveMode_05_fan.glb", PrimitiveMode::TriangleFan),
+    ] {
+        let asset =
+            decode(&fixture(name), &Resources::new(), &DecodeLimits::default()).expect("decodes");
+        let prim = &asset.triangle_primitives()[0];
+        assert_eq!(prim.mode, mode);
+        assert!(!prim.indexed);
+        let expected: Vec<[u32; 3]> = match mode {
+            PrimitiveMode::TriangleStrip => vec![[0, 1, 2], [1, 3, 2]],
+            _ => vec![[1, 2, 0], [2, 3, 0]],
+        };
+        assert_eq!(asset.mesh_input().triangles, expected, "{name}");
+    }
+}
+
+/// A generated asset with what the corpus lacks: interleaving, sparse (with and without a
+/// buffer view), quantized and normalized integers, a custom attribute, colours, joints and
+/// weights, morph targets, instancing, points/lines, a strip with indices, unknown extensions
+/// and extras at every level, a skin and an animation that reference accessors.
+fn kitchen_sink() -> Builder {
+    let mut b = Builder::new();
+    let ext = |tag: &str| json!({"EXT_unknown_thing": {"tag": tag, "nested": {"list": [1, 2.5, null, {"deep": true}]}}});
+    let extras = |tag: &str| json!({"note": tag, "ids": [7, 8]});
+
+    // Mesh 0: 3x3 grid, 8 triangles, u8 indices.
+    let mut interleaved = Vec::new();
+    let mut positions = Vec::new();
+    for j in 0..3 {
+        for i in 0..3 {
+            let p = [i as f32, j as f32, 0.1 * (i * j) as f32];
+            positions.push(p);
+            for x in p.iter().chain(&[0.0f32, 0.0, 1.0]) {
+                interleaved.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+    }
+    let iv = b.view(&interleaved, Some(24));
+    let min = [0.0f32, 0.0, 0.0];
+    let max = [2.0f32, 2.0, 0.4];
+    let pos = b.push("accessors", json!({"bufferView": iv, "componentType": 5126, "count": 9, "type": "VEC3", "min": min, "max": max, "extras": extras("pos"), "extensions": ext("accessor")}));
+    let nrm = b.push("accessors", json!({"bufferView": iv, "byteOffset": 12, "componentType": 5126, "count": 9, "type": "VEC3"}));
+    let uv0: Vec<u8> = (0..9u16)
+        .flat_map(|v| [v * 7000, 65535 - v * 3000])
+        .flat_map(u16::to_le_bytes)
+        .collect();
+    let uvv = b.view(&uv0, None);
+    let tex0 = b.push("accessors", json!({"bufferView": uvv, "componentType": 5123, "normalized": true, "count": 9, "type": "VEC2"}));
+    let colors: Vec<u8> = (0..9u8).flat_map(|v| [v * 20, 255 - v, v, 255]).collect();
+    let cv = b.view(&colors, None);
+    let sparse_idx = b.view(&[2u8, 7], None);
+    let sparse_val = b.view(&[1u8, 2, 3, 4, 5, 6, 7, 8], None);
+    let color0 = b.push("accessors", json!({"bufferView": cv, "componentType": 5121, "normalized": true, "count": 9, "type": "VEC4",
+        "sparse": {"count": 2, "indices": {"bufferView": sparse_idx, "componentType": 5121}, "values": {"bufferView": sparse_val}}}));
+    let sparse_idx1 = b.view(
+        &[1u16.to_le_bytes(), 4u16.to_le_bytes(), 8u16.to_le_bytes()].concat(),
+        None,
+    );
+    let sparse_val1 = b.view(&[200u8, 100, 50, 1, 2, 3, 9, 9, 9], None);
+    let color1 = b.push("accessors", json!({"componentType": 5121, "normalized": true, "count": 9, "type": "VEC3",
+        "sparse": {"count": 3, "indices": {"bufferView": sparse_idx1, "componentType": 5123}, "values": {"bufferView": sparse_val1}}}));
+    // 2-byte elements at a 4-byte stride, as vertex attributes must be.
+    let foo: Vec<u8> = (0..9u16)
+        .flat_map(|v| (1000 + v).to_le_bytes().into_iter().chain([0, 0]))
+        .collect();
+    let fv = b.view(&foo, Some(4));
+    let foo = b.push(
+        "accessors",
+        json!({"bufferView": fv, "componentType": 5123, "count": 9, "type": "SCALAR"}),
+    );
+    let joints: Vec<u8> = (0..9u8).flat_map(|_| [0, 1, 0, 0]).collect();
+    let jv = b.view(&joints, None);
+    let joints = b.push(
+        "accessors",
+        json!({"bufferView": jv, "componentType": 5121, "count": 9, "type": "VEC4"}),
+    );
+    let weights: Vec<[f32; 4]> = (0..9)
+        .map(|v| [0.5 + v as f32 * 0.05, 0.5 - v as f32 * 0.05, 0.0, 0.0])
+        .collect();
+    let weights = b.floats(&weights);
+    let t0_idx = b.view(&[0u8, 4, 8, 0], None);
+    let t0_val_data: Vec<u8> = [[0.0f32, 0.0, 1.0], [0.0, 0.5, 0.5], [1.0, 0.0, 0.0]]
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let t0_val = b.view(&t0_val_data, None);
+    let target0_pos = b.push("accessors", json!({"componentType": 5126, "count": 9, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 0.5, 1.0],
+        "sparse": {"count": 3, "indices": {"bufferView": t0_idx, "componentType": 5121}, "values": {"bufferView": t0_val}}}));
+    let target0_nrm = b.floats(
+        &(0..9)
+            .map(|v| [0.0f32, 0.01 * v as f32, 0.0])
+            .collect::<Vec<_>>(),
+    );
+    let target1_pos = b.floats(
+        &(0..9)
+            .map(|v| [0.1 * v as f32, 0.0, 0.0])
+            .collect::<Vec<_>>(),
+    );
+    let idx: Vec<u8> = vec![
+        0, 1, 4, 0, 4, 3, 1, 2, 5, 1, 5, 4, 3, 4, 7, 3, 7, 6, 4, 5, 8, 4, 8, 7,
+    ];
+    let iv8 = b.view(&idx, None);
+    let indices = b.push(
+        "accessors",
+        json!({"bufferView": iv8, "componentType": 5121, "count": 24, "type": "SCALAR"}),
+    );
+    b.push("meshes", json!({
+        "name": "sink",
+        "weights": [0.5, 0.25],
+        "primitives": [{
+            "attributes": {"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": tex0, "COLOR_0": color0, "COLOR_1": color1,
+                           "_FOO": foo, "JOINTS_0": joints, "WEIGHTS_0": weights},
+            "indices": indices,
+            "material": 0,
+            "targets": [{"POSITION": target0_pos, "NORMAL": target0_nrm}, {"POSITION": target1_pos}],
+            "extensions": ext("primitive"),
+            "extras": extras("primitive")
+        }],
+        "extensions": ext("mesh"),
+        "extras": extras("mesh")
+    }));
+
+    // Mesh 1: quantized positions (i16 normalized, 6-byte elements at stride 8), a fan.
+    let q: Vec<[i16; 3]> = vec![
+        [0, 0, 0],
+        [32767, 0, 0],
+        [20000, 20000, 0],
+        [0, 32767, 0],
+        [-32767, 100, 5],
+    ];
+    let qbytes: Vec<u8> = q
+        .iter()
+        .flat_map(|p| p.iter().flat_map(|c| c.to_le_bytes()).chain([0, 0]))
+        .collect();
+    let qv = b.view(&qbytes, Some(8));
+    let qpos = b.push("accessors", json!({"bufferView": qv, "componentType": 5122, "normalized": true, "count": 5, "type": "VEC3",
+        "min": [-32767, 0, 0], "max": [32767, 32767, 5]}));
+    b.push(
+        "meshes",
+        json!({"name": "quantized", "primitives": [{"attributes": {"POSITION": qpos}, "mode": 6}]}),
+    );
+
+    // Mesh 2: points, lines, and a strip with u32 indices.
+    let ppos = b.floats(&[
+        [0.0f32, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 1.0, 0.5],
+    ]);
+    let line_idx = b.indices(&[0, 1, 1, 3]);
+    let strip_bytes: Vec<u8> = [0u32, 1, 2, 3]
+        .iter()
+        .flat_map(|i| i.to_le_bytes())
+        .collect();
+    let sv = b.view(&strip_bytes, None);
+    let strip_idx = b.push(
+        "accessors",
+        json!({"bufferView": sv, "componentType": 5125, "count": 4, "type": "SCALAR"}),
+    );
+    b.push("meshes", json!({"name": "mixed", "primitives": [
+        {"attributes": {"POSITION": ppos}, "mode": 0},
+        {"attributes": {"POSITION": ppos}, "indices": line_idx, "mode": 1, "extras": extras("lines")},
+        {"attributes": {"POSITION": ppos}, "indices": strip_idx, "mode": 5}
+    ]}));
+
+    // Skin and animation referencing accessors that encode must not renumber.
+    let ibm: Vec<[f32; 4]> = vec![
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+        [0.0, 0.0, 0.0, 1.0],
+    ];
+    let ibm_bytes: Vec<u8> = ibm
+        .iter()
+        .chain(&ibm)
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let ibmv = b.view(&ibm_bytes, None);
+    let ibm = b.push(
+        "accessors",
+        json!({"bufferView": ibmv, "componentType": 5126, "count": 2, "type": "MAT4"}),
+    );
+    let times = b.floats(&[[0.0f32], [1.0]]);
+    let values = b.floats(&[[0.0f32, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    b.push("materials", json!({"name": "m", "pbrMetallicRoughness": {"baseColorFactor": [1, 0.5, 0.25, 1]},
+        "extensions": {"KHR_materials_sheen": {"sheenRoughnessFactor": 0.5}, "EXT_unknown_thing": {"a": 1}}, "extras": extras("material")}));
+    b.push("nodes", json!({"name": "sink-a", "mesh": 0, "skin": 0, "extensions": ext("node"), "extras": extras("node")}));
+    b.push("nodes", json!({"name": "sink-b", "mesh": 0, "skin": 0}));
+    b.push(
+        "nodes",
+        json!({"name": "quantized", "mesh": 1, "scale": [0.001, 0.001, 0.001]}),
+    );
+    b.push("nodes", json!({"name": "mixed", "mesh": 2, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 5, 0, 0, 1]}));
+    b.push("nodes", json!({"name": "joint0", "children": [5]}));
+    b.push("nodes", json!({"name": "joint1"}));
+    b.push("nodes", json!({"name": "root", "children": [2, 3, 4]}));
+    b.push(
+        "skins",
+        json!({"joints": [4, 5], "inverseBindMatrices": ibm, "extras": extras("skin")}),
+    );
+    b.push(
+        "animations",
+        json!({"channels": [{"sampler": 0, "target": {"node": 4, "path": "translation"}}],
+        "samplers": [{"input": times, "output": values}]}),
+    );
+    b.push(
+        "scenes",
+        json!({"nodes": [0, 1, 6], "extensions": ext("scene")}),
+    );
+    b.json["scene"] = json!(0);
+    b.json["extensionsUsed"] = json!([
+        "EXT_unknown_thing",
+        "KHR_mesh_quantization",
+        "KHR_materials_sheen"
+    ]);
+    b.json["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+    b.json["extensions"] = ext("root");
+    b.json["extras"] = extras("root");
+    b
+}
+
+#[test]
+fn kitchen_sink_round_trips_glb_and_gltf() {
+    let b = kitchen_sink();
+    let glb = b.glb();
+    let asset = decode(&glb, &Resources::new(), &DecodeLimits::default()).expect("decodes");
+    // Three triangle primitives: grid (8), fan (3), strip (2); points and lines skipped.
+    let prims = asset.triangle_primitives();
+    assert_eq!(prims.len(), 3);
+    assert_eq!(
+        prims
+            .iter()
+            .map(|p| (p.mesh_index, p.primitive_index, p.faces.len()))
+            .collect::<Vec<_>>(),
+        vec![(0, 0, 8), (1, 0, 3), (2, 2, 2)]
+    );
+    assert_eq!(prims[0].texcoord_sets, vec![0]);
+    // Instanced mesh 0 appears once; weld groups are mesh indices; positions are mesh-local.
+    let input = asset.mesh_input();
+    assert_eq!(input.positions_m.len(), 9 + 5 + 4);
+    assert_eq!(input.weld_group.iter().filter(|&&g| g == 0).count(), 9);
+    assert_eq!(
+        input.positions_m[9 + 1],
+        [1.0, 0.0, 0.0],
+        "i16 normalized 32767 is 1.0"
+    );
+    assert_eq!(input.positions_m[9 + 4][0], -1.0);
+    assert_eq!(
+        input.triangles[8],
+        [10, 11, 9],
+        "fan (v1, v2, v0), offset by 9 grid vertices"
+    );
+    assert_eq!(
+        input.triangles[12],
+        [15, 17, 16],
+        "second strip triangle flips winding"
+    );
+
+    for format in [OutputFormat::Glb, OutputFormat::Gltf] {
+        let (_, out, sets) = round_trip(
+            &glb,
+            &Resources::new(),
+            EncodeOptions {
+                format,
+                ..EncodeOptions::default()
+            },
+        );
+        assert_eq!(sets, vec![1, 0, 0], "first free set");
+        let doc = parse(&out);
+        assert_eq!(out.starts_with(b"glTF"), format == OutputFormat::Glb);
+        // Quantized stays quantized; custom attribute keeps its type.
+        let grid = &doc.json["meshes"][0]["primitives"][0]["attributes"];
+        let tex0 = &doc.json["accessors"][grid["TEXCOORD_0"].as_u64().expect("tex0") as usize];
+        assert_eq!(
+            (tex0["componentType"].as_u64(), tex0["normalized"].as_bool()),
+            (Some(5123), Some(true))
+        );
+        let foo = &doc.json["accessors"][grid["_FOO"].as_u64().expect("foo") as usize];
+        assert_eq!(foo["componentType"], 5123);
+        let qpos = doc.json["meshes"][1]["primitives"][0]["attributes"]["POSITION"]
+            .as_u64()
+            .expect("pos") as usize;
+        assert_eq!(doc.json["accessors"][qpos]["componentType"], 5122);
+        assert!(doc.json["accessors"][qpos]["min"].is_array());
+        // Unknown extensions and extras survive at every level.
+        let text = serde_json::to_string(&doc.json).expect("json");
+        for tag in ["root", "node", "mesh", "primitive", "accessor", "scene"] {
+            assert!(
+                text.contains(&format!("\"tag\":\"{tag}\"")),
+                "extension on {tag} lost"
+            );
+        }
+        for tag in [
+            "root",
+            "node",
+            "mesh",
+            "primitive",
+            "material",
+            "skin",
+            "lines",
+            "pos",
+        ] {
+            assert!(
+                text.contains(&format!("\"note\":\"{tag}\"")),
+                "extras on {tag} lost"
+            );
+        }
+    }
+}
+
+#[test]
+fn vertex_attribute_elements_are_four_byte_aligned_in_the_output() {
+    let (_, out, _) = round_trip(
+        &kitchen_sink().glb(),
+        &Resources::new(),
+        EncodeOptions::default(),
+    );
+    let doc = parse(&out);
+    let prim = &doc.json["meshes"][0]["primitives"][0];
+    for (name, a) in prim["attributes"].as_object().expect("attributes") {
+        let accessor = &doc.json["accessors"][a.as_u64().expect("index") as usize];
+        let view =
+            &doc.json["bufferViews"][accessor["bufferView"].as_u64().expect("view") as usize];
+        let offset =
+            view["byteOffset"].as_u64().unwrap_or(0) + accessor["byteOffset"].as_u64().unwrap_or(0);
+        assert_eq!(offset % 4, 0, "{name} offset");
+        if let Some(stride) = view["byteStride"].as_u64() {
+            assert_eq!(stride % 4, 0, "{name} stride");
+        }
+    }
+    // COLOR_1 is u8 VEC3 (3 bytes): it needs a padded stride of 4.
+    let c1 = &doc.json["accessors"][prim["attributes"]["COLOR_1"].as_u64().expect("c1") as usize];
+    assert_eq!(
+        doc.json["bufferViews"][c1["bufferView"].as_u64().expect("v") as usize]["byteStride"],
+        4
+    );
+}
+
+#[test]
+fn replace_target_overwrites_a_chosen_set() {
+    let glb = kitchen_sink().glb();
+    let (_, out, sets) = round_trip(
+        &glb,
+        &Resources::new(),
+        EncodeOptions {
+            uv_target: UvTarget::Replace(0),
+            ..EncodeOptions::default()
+        },
+    );
+    assert_eq!(sets, vec![0, 0, 0]);
+    let doc = parse(&out);
+    let tex0 = doc.json["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"]
+        .as_u64()
+        .expect("tex0") as usize;
+    assert_eq!(
+        doc.json["accessors"][tex0]["componentType"], 5126,
+        "replaced by float UVs"
+    );
+    assert!(doc.json["meshes"][0]["primitives"][0]["attributes"]
+        .get("TEXCOORD_1")
+        .is_none());
+
+    let asset = decode(&glb, &Resources::new(), &DecodeLimits::default()).expect("decodes");
+    let err = encode(
+        &asset,
+        &test_uvs(&asset),
+        &EncodeOptions {
+            uv_target: UvTarget::Replace(3),
+            ..EncodeOptions::default()
+        },
+    )
+    .expect_err("gap");
+    assert_eq!(err.code, ErrorCode::UvTarget);
+    assert_eq!(err.json_path, "/meshes/0/primitives/0/attributes");
+}
+
+#[test]
+fn continuous_uvs_split_nothing_and_seams_split_only_their_vertices() {
+    let b = kitchen_sink();
+    let asset = decode(&b.glb(), &Resources::new(), &DecodeLimits::default()).expect("decodes");
+    let per_vertex: Vec<[[f32; 2]; 3]> = asset
+        .mesh_input()
+        .triangles
+        .iter()
+        .map(|t| t.map(|v| [v as f32 / 32.0, 0.5]))
+        .collect();
+    let out = encode(&asset, &per_vertex, &EncodeOptions::default()).expect("encodes");
+    let doc = parse(&out.bytes);
+    let count = |doc: &Doc| {
+        let a = doc.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"]
+            .as_u64()
+            .expect("pos") as usize;
+        doc.json["accessors"][a]["count"].as_u64()
+    };
+    assert_eq!(count(&doc), Some(9), "no seam → no split");
+    // Cut the grid along its middle column: faces 0..4 (left half) get u + 0.5 on vertices 1, 4, 7.
+    let mut seamed = per_vertex.clone();
+    for (f, t) in asset.mesh_input().triangles.iter().enumerate().take(8) {
+        if [0, 1, 4, 5].contains(&f) {
+            for c in 0..3 {
+                if [1, 4, 7].contains(&t[c]) {
+                    seamed[f][c][0] += 0.5;
+                }
+            }
+        }
+    }
+    let out = encode(&asset, &seamed, &EncodeOptions::default()).expect("encodes");
+    assert_eq!(
+        count(&parse(&out.bytes)),
+        Some(12),
+        "three seam vertices split once each"
+    );
+}
+
+#[test]
+fn many_vertices_use_u32_indices() {
+    let mut b = Builder::new();
+    let n = 70_000usize;
+    let pos: Vec<[f32; 3]> = (0..n)
+        .map(|i| [(i / 2) as f32, (i % 2) as f32, 0.0])
+        .collect();
+    let pos = b.floats(&pos);
+    b.push(
+        "meshes",
+        json!({"primitives": [{"attributes": {"POSITION": pos}, "mode": 5}]}),
+    );
+    b.push("nodes", json!({"mesh": 0}));
+    let asset = decode(&b.glb(), &Resources::new(), &DecodeLimits::default()).expect("decodes");
+    assert_eq!(asset.mesh_input().triangles.len(), n - 2);
+    let uvs: Vec<[[f32; 2]; 3]> = asset
+        .mesh_input()
+        .triangles
+        .iter()
+        .map(|t| t.map(|v| [v as f32 / n as f32, 0.0]))
+        .collect();
+    let out = encode(&asset, &uvs, &EncodeOptions::default()).expect("encodes");
+    let doc = parse(&out.bytes);
+    let idx = doc.json["meshes"][0]["primitives"][0]["indices"]
+        .as_u64()
+        .expect("indices") as usize;
+    assert_eq!(doc.json["accessors"][idx]["componentType"], 5125);
+    assert_eq!(doc.json["meshes"][0]["primitives"][0]["mode"], 4);
+    // And a small mesh uses u16.
+    let (_, out, _) = round_trip(
+        &fixture("Box.glb"),
+        &Resources::new(),
+        EncodeOptions::default(),
+    );
+    let doc = parse(&out);
+    let idx = doc.json["meshes"][0]["primitives"][0]["indices"]
+        .as_u64()
+        .expect("indices") as usize;
+    assert_eq!(doc.json["accessors"][idx]["componentType"], 5123);
+}
+
+#[test]
+fn external_buffer_and_image_from_resources_are_embedded() {
+    let mut b = kitchen_sink();
+    b.push(
+        "images",
+        json!({"uri": "tex/wood%20grain.png", "name": "wood"}),
+    );
+    b.push("textures", json!({"source": 0}));
+    b.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] =
+        json!({"index": 0, "texCoord": 0});
+    let gltf = b.gltf_external("scene.bin");
+    let png = b"\x89PNG\r\n\x1a\nfake-image-bytes".to_vec();
+    let mut resources = Resources::new();
+    resources.insert("scene.bin", b.bin.clone());
+    resources.insert("tex/wood grain.png", png.clone());
+
+    // Without resources: a typed error naming the URI.
+    let err = decode(&gltf, &Resources::new(), &DecodeLimits::default()).expect_err("missing");
+    assert_eq!(
+        (err.code, err.json_path.as_str()),
+        (ErrorCode::ResourceMissing, "/buffers/0/uri")
+    );
+
+    let (asset, out, _) = round_trip(&gltf, &resources, EncodeOptions::default());
+    assert_eq!(asset.source_format(), SourceFormat::Gltf);
+    let doc = parse(&out);
+    let image = &doc.json["images"][0];
+    assert!(image.get("uri").is_none());
+    assert_eq!(image["mimeType"], "image/png");
+    assert_eq!(image["name"], "wood");
+    let view = &doc.json["bufferViews"][image["bufferView"].as_u64().expect("view") as usize];
+    let start = view["byteOffset"].as_u64().expect("offset") as usize;
+    assert_eq!(&doc.buffers[0][start..start + png.len()], &png[..]);
+    assert_eq!(
+        doc.json["materials"], b.json["materials"],
+        "texCoord references untouched"
+    );
+}
+
+#[test]
+fn summary_lists_meshes_primitives_and_extensions() {
+    let asset = decode(
+        &kitchen_sink().glb(),
+        &Resources::new(),
+        &DecodeLimits::default(),
+    )
+    .expect("decodes");
+    let s = asset.summary();
+    assert_eq!(s.format, SourceFormat::Glb);
+    assert_eq!(s.node_count, 7);
+    assert_eq!(s.meshes.len(), 3);
+    assert_eq!(s.meshes[0].name.as_deref(), Some("sink"));
+    assert_eq!(s.meshes[0].instances, 2);
+    assert_eq!(s.meshes[0].primitives[0].triangle_count, Some(8));
+    assert_eq!(s.meshes[0].primitives[0].morph_targets, 2);
+    assert!(s.meshes[0].primitives[0]
+        .attributes
+        .contains(&"_FOO".to_string()));
+    assert_eq!(
+        s.meshes[2]
+            .primitives
+            .iter()
+            .map(|p| p.mode)
+            .collect::<Vec<_>>(),
+        vec![0, 1, 5]
+    );
+    assert_eq!(s.meshes[2].primitives[1].triangle_count, None);
+    assert_eq!(
+        s.extensions_required,
+        vec!["KHR_mesh_quantization".to_string()]
+    );
+    assert_eq!(asset.face_range(1), Some(8..11));
+    assert_eq!(asset.face_range(3), None);
+}
+
+#[test]
+fn encode_rejects_mismatched_or_non_finite_uvs() {
+    let asset = decode(
+        &fixture("Box.glb"),
+        &Resources::new(),
+        &DecodeLimits::default(),
+    )
+    .expect("decodes");
+    let mut uvs = test_uvs(&asset);
+    uvs.pop();
+    assert_eq!(
+        encode(&asset, &uvs, &EncodeOptions::default())
+            .expect_err("short")
+            .code,
+        ErrorCode::UvInput
+    );
+    let mut uvs = test_uvs(&asset);
+    uvs[3][1][0] = f32::NAN;
+    let err = encode(&asset, &uvs, &EncodeOptions::default()).expect_err("nan");
+    assert_eq!(err.code, ErrorCode::UvInput);
+    assert!(err.detail.contains("face 3"), "{}", err.detail);
+}
+
+#[test]
+fn encoding_is_deterministic() {
+    let asset = decode(
+        &kitchen_sink().glb(),
+        &Resources::new(),
+        &DecodeLimits::default(),
+    )
+    .expect("decodes");
+    let uvs = test_uvs(&asset);
+    let a = encode(&asset, &uvs, &EncodeOptions::default()).expect("encodes");
+    let b = encode(&asset, &uvs, &EncodeOptions::default()).expect("encodes");
+    assert_eq!(a, b);
+}
