@@ -338,7 +338,7 @@ fn decode_unguarded(
     })
 }
 
-fn parse_json(json: &[u8]) -> Result<Value, GltfError> {
+pub(crate) fn parse_json(json: &[u8]) -> Result<Value, GltfError> {
     let value: Value = serde_json::from_slice(json).map_err(|e| {
         let message = e.to_string();
         if message.contains("recursion limit") {

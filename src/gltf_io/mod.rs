@@ -37,6 +37,7 @@ mod accessor;
 mod decode;
 mod encode;
 mod error;
+mod external;
 mod glb;
 mod uri;
 
@@ -46,6 +47,7 @@ pub use decode::{
 };
 pub use encode::{encode, EncodeOptions, EncodedAsset, OutputFormat, UvTarget};
 pub use error::{ErrorCode, GltfError};
+pub use external::{external_resources, ExternalReference};
 pub use uri::Resources;
 
 #[doc(no_inline)]

@@ -54,7 +54,7 @@ impl Resources {
     }
 }
 
-fn percent_decode(s: &str) -> Option<String> {
+pub(crate) fn percent_decode(s: &str) -> Option<String> {
     if !s.contains('%') {
         return None;
     }
@@ -104,7 +104,7 @@ pub(crate) fn resolve<'a>(
     })
 }
 
-fn check_relative(uri: &str, path: &str) -> Result<(), GltfError> {
+pub(crate) fn check_relative(uri: &str, path: &str) -> Result<(), GltfError> {
     let forbidden = |why: &str| {
         GltfError::new(
             ErrorCode::UriForbidden,
