@@ -365,11 +365,11 @@ fn kitchen_sink() -> Builder {
     let color1 = b.push("accessors", json!({"componentType": 5121, "normalized": true, "count": 9, "type": "VEC3",
         "sparse": {"count": 3, "indices": {"bufferView": sparse_idx1, "componentType": 5123}, "values": {"bufferView": sparse_val1}}}));
     // 2-byte elements at a 4-byte stride, as vertex attributes must be.
-    let foo: Vec<u8> = (0..9u16)
+    let custom_bytes: Vec<u8> = (0..9u16)
         .flat_map(|v| (1000 + v).to_le_bytes().into_iter().chain([0, 0]))
         .collect();
-    let fv = b.view(&foo, Some(4));
-    let foo = b.push(
+    let fv = b.view(&custom_bytes, Some(4));
+    let custom = b.push(
         "accessors",
         json!({"bufferView": fv, "componentType": 5123, "count": 9, "type": "SCALAR"}),
     );
@@ -415,7 +415,7 @@ fn kitchen_sink() -> Builder {
         "weights": [0.5, 0.25],
         "primitives": [{
             "attributes": {"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": tex0, "COLOR_0": color0, "COLOR_1": color1,
-                           "_FOO": foo, "JOINTS_0": joints, "WEIGHTS_0": weights},
+                           "_FOO": custom, "JOINTS_0": joints, "WEIGHTS_0": weights},
             "indices": indices,
             "material": 0,
             "targets": [{"POSITION": target0_pos, "NORMAL": target0_nrm}, {"POSITION": target1_pos}],

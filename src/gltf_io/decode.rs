@@ -314,6 +314,7 @@ fn decode_unguarded(
     };
     let root = parse_json(json_bytes)?;
     check_version(&root)?;
+    check_primitive_references(&root)?;
     check_schema(json_bytes)?;
     check_extensions(&root)?;
     check_nodes(&root)?;
@@ -390,6 +391,42 @@ fn check_version(root: &Value) -> Result<(), GltfError> {
     }
 }
 
+/// Every accessor reference of every primitive must exist. Checked before `gltf-json`'s
+/// validation because that indexes `accessors[POSITION]` unchecked and panics otherwise.
+fn check_primitive_references(root: &Value) -> Result<(), GltfError> {
+    let accessors = array(root, "accessors").len() as u64;
+    let check = |value: &Value, path: String| -> Result<(), GltfError> {
+        match value.as_u64() {
+            Some(i) if i < accessors => Ok(()),
+            _ => Err(GltfError::new(
+                ErrorCode::Schema,
+                path,
+                format!("{value} is not an accessor index (there are {accessors})"),
+                "point the attribute at an existing accessor",
+            )),
+        }
+    };
+    for (m, mesh) in array(root, "meshes").iter().enumerate() {
+        for (p, prim) in array(mesh, "primitives").iter().enumerate() {
+            let path = format!("/meshes/{m}/primitives/{p}");
+            if let Some(attributes) = prim.get("attributes").and_then(Value::as_object) {
+                for (name, value) in attributes {
+                    check(value, format!("{path}/attributes/{name}"))?;
+                }
+            }
+            if let Some(indices) = prim.get("indices") {
+                check(indices, format!("{path}/indices"))?;
+            }
+            for (t, target) in array(prim, "targets").iter().enumerate() {
+                for (name, value) in target.as_object().into_iter().flatten() {
+                    check(value, format!("{path}/targets/{t}/{name}"))?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Schema validation by `gltf-json` (typed parse + its `Validate`), reported with JSON pointers.
 /// Cost: a second parse of the JSON text into typed structs.
 fn check_schema(json: &[u8]) -> Result<(), GltfError> {
@@ -411,10 +448,15 @@ fn check_schema(json: &[u8]) -> Result<(), GltfError> {
         // EXT_texture_webp, ...) has no `source`, which is legal too.
         let extension_list =
             path.starts_with("extensionsRequired[") || path.starts_with("extensionsUsed[");
-        let extension_texture = path.starts_with("textures[")
-            && path.ends_with(".source")
-            && error == gltf_json::validation::Error::Missing;
-        if extension_list || extension_texture {
+        let missing = error == gltf_json::validation::Error::Missing;
+        let extension_texture =
+            missing && path.starts_with("textures[") && path.ends_with(".source");
+        // An accessor without buffer view is all zeros (spec §3.6.2.1), which is legal.
+        let zero_accessor =
+            missing && path.starts_with("accessors[") && path.ends_with(".bufferView");
+        // POSITION is optional for the spec; `extract_triangles` names it where we need it.
+        let no_position = missing && path.ends_with("attributes[\"POSITION\"]");
+        if extension_list || extension_texture || zero_accessor || no_position {
             return;
         }
         total += 1;

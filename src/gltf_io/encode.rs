@@ -27,6 +27,7 @@
 //!
 //! References: glTF 2.0 spec §3.6.2.4 (data alignment), §3.6.2.5 (accessor bounds: min/max are
 //! raw values, `normalized` has no effect), §3.7.2.1 (primitive modes), §4.4 (GLB).
+use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 
 use base64::Engine as _;
@@ -192,14 +193,11 @@ pub fn encode(
         let mut gather =
             |name: &str, index: u64, ref_path: &str, out: &mut Output| -> Result<u64, GltfError> {
                 let layout = reader.layout(index, ref_path)?;
-                if !packed_cache.contains_key(&layout.index) {
-                    let packed = reader.read_packed(layout)?;
-                    packed_cache.insert(layout.index, packed);
-                }
-                let packed = packed_cache
-                    .get(&layout.index)
-                    .map(Vec::as_slice)
-                    .unwrap_or(&[]);
+                // Accessors shared by several primitives are read once.
+                let packed: &[u8] = match packed_cache.entry(layout.index) {
+                    Entry::Occupied(e) => e.into_mut(),
+                    Entry::Vacant(e) => e.insert(reader.read_packed(layout)?),
+                };
                 let source_json = asset.json.pointer(&format!("/accessors/{}", layout.index));
                 let with_bounds =
                     name == "POSITION" || source_json.is_some_and(|a| a.get("min").is_some());
