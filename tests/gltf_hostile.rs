@@ -388,3 +388,118 @@ fn points_and_lines_without_position_are_carried() {
     let asset = run(&b.glb()).expect("POSITION is optional outside triangle primitives");
     assert_eq!(asset.triangle_primitives().len(), 1);
 }
+
+/// Paths of every number in a JSON tree (JSON pointers).
+fn number_paths(value: &serde_json::Value, path: String, out: &mut Vec<String>) {
+    match value {
+        serde_json::Value::Number(_) => out.push(path),
+        serde_json::Value::Array(items) => {
+            for (i, v) in items.iter().enumerate() {
+                number_paths(v, format!("{path}/{i}"), out);
+            }
+        }
+        serde_json::Value::Object(map) => {
+            for (k, v) in map {
+                number_paths(
+                    v,
+                    format!("{path}/{}", k.replace('~', "~0").replace('/', "~1")),
+                    out,
+                );
+            }
+        }
+        _ => {}
+    }
+}
+
+#[test]
+fn structural_mutations_never_panic() {
+    // Byte flips mostly break the JSON syntax; this mutates the numbers the decoder trusts
+    // least (counts, offsets, strides, indices, component types, modes) in a valid asset with
+    // sparse accessors, interleaving, morph targets, instancing and a skin.
+    let mut b = Builder::new();
+    let mut interleaved = Vec::new();
+    for v in 0..4u8 {
+        for x in [f32::from(v % 2), f32::from(v / 2), 0.0, 0.0, 0.0, 1.0] {
+            interleaved.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    let iv = b.view(&interleaved, Some(24));
+    let pos = b.push("accessors", json!({"bufferView": iv, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}));
+    let nrm = b.push("accessors", json!({"bufferView": iv, "byteOffset": 12, "componentType": 5126, "count": 4, "type": "VEC3"}));
+    let si = b.view(&[1u8, 3, 0, 0], None);
+    let sv = b.view(&[0u8; 24], None);
+    let target = b.push("accessors", json!({"componentType": 5126, "count": 4, "type": "VEC3",
+        "sparse": {"count": 2, "indices": {"bufferView": si, "componentType": 5121}, "values": {"bufferView": sv}}}));
+    let idx = b.indices(&[0, 1, 2, 2, 1, 3]);
+    b.push("meshes", json!({"primitives": [
+        {"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx, "targets": [{"POSITION": target}]},
+        {"attributes": {"POSITION": pos}, "mode": 5},
+        {"attributes": {"POSITION": pos}, "indices": idx, "mode": 1}
+    ]}));
+    b.push("nodes", json!({"mesh": 0, "children": [1]}));
+    b.push("nodes", json!({"mesh": 0}));
+    let base = b.json.clone();
+    let mut paths = Vec::new();
+    number_paths(&base, String::new(), &mut paths);
+    assert!(paths.len() > 40);
+    let values = [
+        json!(0),
+        json!(1),
+        json!(2),
+        json!(3),
+        json!(4),
+        json!(5),
+        json!(6),
+        json!(7),
+        json!(12),
+        json!(255),
+        json!(5121),
+        json!(5123),
+        json!(5125),
+        json!(5126),
+        json!(65535),
+        json!(2_147_483_648u64),
+        json!(4_294_967_295u64),
+        json!(4_294_967_296u64),
+        json!(u64::MAX),
+        json!(-1),
+        json!(1.5),
+        json!(-0.0),
+        json!(1e300),
+    ];
+    let mut state = 0x2545_F491_4F6C_DD1Du64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let mut decoded = 0;
+    for _ in 0..3000 {
+        let mut m = Builder {
+            json: base.clone(),
+            bin: b.bin.clone(),
+        };
+        for _ in 0..1 + next() % 3 {
+            let path = &paths[(next() % paths.len() as u64) as usize];
+            let value = values[(next() % values.len() as u64) as usize].clone();
+            if let Some(slot) = m.json.pointer_mut(path) {
+                *slot = value;
+            }
+        }
+        match run(&m.glb()) {
+            Ok(asset) => {
+                decoded += 1;
+                let uvs = vec![
+                    [[0.5f32, 0.5], [0.0, 0.0], [1.0, 0.0]];
+                    asset.mesh_input().triangles.len()
+                ];
+                if let Err(e) = encode(&asset, &uvs, &EncodeOptions::default()) {
+                    assert_ne!(e.code, ErrorCode::Internal, "{e}");
+                }
+            }
+            Err(e) => assert_ne!(e.code, ErrorCode::Internal, "{e}\n{}", m.json),
+        }
+    }
+    assert!(decoded > 100 && decoded < 3000, "{decoded} of 3000 decoded");
+}
