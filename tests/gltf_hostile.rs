@@ -503,3 +503,19 @@ fn structural_mutations_never_panic() {
     }
     assert!(decoded > 100 && decoded < 3000, "{decoded} of 3000 decoded");
 }
+
+#[test]
+fn schema_type_errors_name_their_json_path() {
+    let mut b = triangle();
+    b.json["accessors"][1]["count"] = json!("three");
+    expect_err(&b.glb(), ErrorCode::Schema, "/accessors/1/count");
+    let mut b = triangle();
+    b.json["accessors"][0]
+        .as_object_mut()
+        .expect("object")
+        .remove("componentType");
+    expect_err(&b.glb(), ErrorCode::Schema, "/accessors/0");
+    let mut b = triangle();
+    b.json["meshes"][0]["primitives"][0]["mode"] = json!(9);
+    expect_err(&b.glb(), ErrorCode::Schema, "/meshes/0/primitives/0/mode");
+}

@@ -26,7 +26,9 @@ use gltf_json::validation::Validate as _;
 use serde_json::Value;
 
 use super::accessor::{array, field_u64, ComponentType, Reader};
-use super::error::{pointer_from_gltf_path, ErrorCode, GltfError};
+use super::error::{
+    offset_of_line_column, pointer_at_offset, pointer_from_gltf_path, ErrorCode, GltfError,
+};
 use super::glb;
 use super::uri::{resolve, Resolved, Resources};
 use crate::mesh::MeshInput;
@@ -431,9 +433,10 @@ fn check_primitive_references(root: &Value) -> Result<(), GltfError> {
 /// Cost: a second parse of the JSON text into typed structs.
 fn check_schema(json: &[u8]) -> Result<(), GltfError> {
     let typed: gltf_json::Root = serde_json::from_slice(json).map_err(|e| {
+        let offset = offset_of_line_column(json, e.line(), e.column());
         GltfError::new(
             ErrorCode::Schema,
-            "",
+            pointer_at_offset(json, offset),
             format!("the document does not follow the glTF 2.0 schema: {e}"),
             "fix the property named in the message",
         )
