@@ -802,13 +802,20 @@ fn extract_triangles(
                     }
                     let packed = reader.read_packed(position)?;
                     let size = position.component_type.size();
+                    let float = position.component_type == ComponentType::F32;
                     input.positions_m.reserve(vertex_count as usize);
                     for (i, element) in packed.chunks_exact(position.element_size).enumerate() {
                         let mut p = [0.0f64; 3];
                         for (c, value) in p.iter_mut().enumerate() {
-                            *value = position
-                                .component_type
-                                .value(&element[c * size..], position.normalized);
+                            let bytes = &element[c * size..];
+                            *value = if float {
+                                // Fast path for the common case (no normalization to apply).
+                                f64::from(f32::from_le_bytes([
+                                    bytes[0], bytes[1], bytes[2], bytes[3],
+                                ]))
+                            } else {
+                                position.component_type.value(bytes, position.normalized)
+                            };
                         }
                         if !p.iter().all(|x| x.is_finite()) {
                             return Err(GltfError::new(
@@ -830,9 +837,9 @@ fn extract_triangles(
                 }
             };
 
-            // Corner stream: the indices, or 0..count without them.
+            // Corner stream: the indices (checked < vertex count), or 0..count without them.
             let indices_path = format!("{path}/indices");
-            let (corner_count, packed_indices) = match field_u64(prim, "indices", &path)? {
+            let stream: Option<Vec<u32>> = match field_u64(prim, "indices", &path)? {
                 Some(index) => {
                     let layout = reader.layout(index, &indices_path)?;
                     if layout.kind != "SCALAR"
@@ -849,23 +856,45 @@ fn extract_triangles(
                             "re-export the indices",
                         ));
                     }
-                    (
-                        layout.count,
-                        Some((
-                            reader.read_packed(layout)?,
-                            layout.component_type,
-                            layout.index,
-                        )),
-                    )
+                    let packed = reader.read_packed(layout)?;
+                    let values: Vec<u32> = match layout.component_type {
+                        ComponentType::U8 => packed.iter().map(|&b| u32::from(b)).collect(),
+                        ComponentType::U16 => packed
+                            .chunks_exact(2)
+                            .map(|c| u32::from(u16::from_le_bytes([c[0], c[1]])))
+                            .collect(),
+                        _ => packed
+                            .chunks_exact(4)
+                            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                            .collect(),
+                    };
+                    drop(packed);
+                    if let Some((k, v)) = values
+                        .iter()
+                        .enumerate()
+                        .find(|(_, &v)| u64::from(v) >= vertex_count)
+                    {
+                        return Err(GltfError::new(
+                            ErrorCode::IndexOutOfRange,
+                            indices_path,
+                            format!(
+                                "index #{k} of accessor {} is {v}, but there are {vertex_count} vertices",
+                                layout.index
+                            ),
+                            "re-export the mesh; indices must be smaller than the vertex count",
+                        ));
+                    }
+                    Some(values)
                 }
-                None => (vertex_count, None),
+                None => None,
             };
+            let corner_count = stream.as_ref().map_or(vertex_count, |s| s.len() as u64);
             let triangle_count = match mode {
                 PrimitiveMode::Triangles => {
                     if corner_count % 3 != 0 {
                         return Err(primitive_error(
                             ErrorCode::PrimitiveInvalid,
-                            if packed_indices.is_some() { indices_path } else { format!("{path}/attributes/POSITION") },
+                            if stream.is_some() { indices_path } else { format!("{path}/attributes/POSITION") },
                             format!("a TRIANGLES primitive needs a multiple of 3 corners, found {corner_count}"),
                         ));
                     }
@@ -886,37 +915,25 @@ fn extract_triangles(
                     limits.max_triangles.unwrap_or(0),
                 ));
             }
-            let corner = |k: u64| -> Result<u32, GltfError> {
-                let local = match &packed_indices {
-                    None => k,
-                    Some((bytes, ct, accessor)) => {
-                        let size = ct.size();
-                        let at = k as usize * size;
-                        let v = ct.raw(bytes.get(at..at + size).unwrap_or(&[])) as u64;
-                        if v >= vertex_count {
-                            return Err(GltfError::new(
-                                ErrorCode::IndexOutOfRange,
-                                format!("{path}/indices"),
-                                format!("index #{k} of accessor {accessor} is {v}, but there are {vertex_count} vertices"),
-                                "re-export the mesh; indices must be smaller than the vertex count",
-                            ));
-                        }
-                        v
-                    }
+            // `k < corner_count` for every call below, so `get` never misses.
+            let corner = |k: u64| -> u32 {
+                let local = match &stream {
+                    None => k as u32,
+                    Some(s) => s.get(k as usize).copied().unwrap_or(0),
                 };
-                Ok(vertex_start + local as u32)
+                vertex_start + local
             };
             input.triangles.reserve(triangle_count as usize);
             for i in 0..triangle_count {
                 let t = match mode {
                     PrimitiveMode::Triangles => {
-                        [corner(3 * i)?, corner(3 * i + 1)?, corner(3 * i + 2)?]
+                        [corner(3 * i), corner(3 * i + 1), corner(3 * i + 2)]
                     }
                     PrimitiveMode::TriangleStrip => {
                         let odd = i % 2;
-                        [corner(i)?, corner(i + 1 + odd)?, corner(i + 2 - odd)?]
+                        [corner(i), corner(i + 1 + odd), corner(i + 2 - odd)]
                     }
-                    PrimitiveMode::TriangleFan => [corner(i + 1)?, corner(i + 2)?, corner(0)?],
+                    PrimitiveMode::TriangleFan => [corner(i + 1), corner(i + 2), corner(0)],
                 };
                 input.triangles.push(t);
             }
@@ -928,7 +945,7 @@ fn extract_triangles(
                 vertex_start,
                 vertex_count: vertex_count_u32,
                 texcoord_sets,
-                indexed: packed_indices.is_some(),
+                indexed: stream.is_some(),
             });
         }
     }
