@@ -10,8 +10,8 @@ use std::collections::BTreeSet;
 use gltf_common::{parse, Builder, Doc};
 use serde_json::{json, Value};
 use texatlas::gltf_io::{
-    decode, encode, Asset, DecodeLimits, EncodeOptions, ErrorCode, OutputFormat, PrimitiveMode,
-    Resources, SourceFormat, UvTarget,
+    decode, encode, Asset, DecodeLimits, EncodeOptions, ErrorCode, OldVertexData, OutputFormat,
+    PrimitiveMode, Resources, SourceFormat, UvTarget,
 };
 
 fn fixture(name: &str) -> Vec<u8> {
@@ -59,18 +59,36 @@ fn check_round_trip(
             assert_eq!(out.json.get(key), Some(value), "top-level `{key}` changed");
         }
     }
-    // 2. Existing accessors keep their index, JSON (except the rebased view) and data.
+    // 2. Existing accessors keep their index, JSON and data, except old vertex data that was
+    //    dropped: then the accessor is a one-element zero accessor that nothing references.
     let in_accessors = input.json["accessors"]
         .as_array()
         .cloned()
         .unwrap_or_default();
+    let referenced = referenced_accessors(&out.json);
     for (i, a) in in_accessors.iter().enumerate() {
-        assert_eq!(a, &out.json["accessors"][i], "accessor {i} JSON changed");
-        assert_eq!(
-            input.elements(i),
-            out.elements(i),
-            "accessor {i} data changed"
-        );
+        let o = &out.json["accessors"][i];
+        if o == a {
+            assert_eq!(
+                input.elements(i),
+                out.elements(i),
+                "accessor {i} data changed"
+            );
+        } else {
+            assert!(
+                !referenced.contains(&i),
+                "accessor {i} changed but is still referenced"
+            );
+            assert_eq!(
+                (o["count"].as_u64(), o.get("bufferView")),
+                (Some(1), None),
+                "accessor {i}: {o}"
+            );
+            assert_eq!(
+                (&o["componentType"], &o["type"]),
+                (&a["componentType"], &a["type"])
+            );
+        }
     }
     // 3. Images keep every property (external ones may have gained bufferView/mimeType).
     for (i, image) in input.json["images"]
@@ -187,6 +205,42 @@ fn check_round_trip(
         }
     }
     assert_eq!(tri_index, asset.triangle_primitives().len());
+}
+
+/// Every accessor index the document references from primitives, skins and animations.
+fn referenced_accessors(json: &Value) -> BTreeSet<usize> {
+    let mut out = BTreeSet::new();
+    let mut add = |v: &Value| {
+        if let Some(i) = v.as_u64() {
+            out.insert(i as usize);
+        }
+    };
+    for mesh in json["meshes"].as_array().into_iter().flatten() {
+        for prim in mesh["primitives"].as_array().into_iter().flatten() {
+            prim["attributes"]
+                .as_object()
+                .into_iter()
+                .flatten()
+                .for_each(|(_, v)| add(v));
+            add(&prim["indices"]);
+            for t in prim["targets"].as_array().into_iter().flatten() {
+                t.as_object()
+                    .into_iter()
+                    .flatten()
+                    .for_each(|(_, v)| add(v));
+            }
+        }
+    }
+    for skin in json["skins"].as_array().into_iter().flatten() {
+        add(&skin["inverseBindMatrices"]);
+    }
+    for anim in json["animations"].as_array().into_iter().flatten() {
+        for sampler in anim["samplers"].as_array().into_iter().flatten() {
+            add(&sampler["input"]);
+            add(&sampler["output"]);
+        }
+    }
+    out
 }
 
 /// decode → UVs → encode → independent check → decode again (same triangles, same positions).
@@ -870,4 +924,51 @@ fn encoding_is_deterministic() {
     let a = encode(&asset, &uvs, &EncodeOptions::default()).expect("encodes");
     let b = encode(&asset, &uvs, &EncodeOptions::default()).expect("encodes");
     assert_eq!(a, b);
+}
+
+#[test]
+fn old_vertex_data_is_dropped_only_when_safe() {
+    let sizes = |bytes: &[u8]| {
+        let asset = decode(bytes, &Resources::new(), &DecodeLimits::default()).expect("decodes");
+        let uvs = test_uvs(&asset);
+        let keep = EncodeOptions {
+            old_vertex_data: OldVertexData::Keep,
+            ..EncodeOptions::default()
+        };
+        let kept = encode(&asset, &uvs, &keep).expect("encodes").bytes;
+        let dropped = encode(&asset, &uvs, &EncodeOptions::default())
+            .expect("encodes")
+            .bytes;
+        (kept, dropped)
+    };
+    // Box: no extensions, nothing else references the mesh accessors → dropped, file smaller.
+    let (kept, dropped) = sizes(&fixture("Box.glb"));
+    assert!(
+        dropped.len() < kept.len(),
+        "{} !< {}",
+        dropped.len(),
+        kept.len()
+    );
+    let doc = parse(&dropped);
+    assert_eq!(
+        doc.json["accessors"][0]["count"], 1,
+        "old accessor reduced to a zero accessor"
+    );
+    let (_, out, _) = round_trip(
+        &fixture("Box.glb"),
+        &Resources::new(),
+        EncodeOptions::default(),
+    );
+    assert_eq!(parse(&out).json["accessors"][0]["count"], 1);
+    // SimpleSkin: skin and animation accessors stay intact (checked by `round_trip`).
+    let (kept, dropped) = sizes(&fixture("SimpleSkin.glb"));
+    assert!(dropped.len() < kept.len());
+    round_trip(
+        &fixture("SimpleSkin.glb"),
+        &Resources::new(),
+        EncodeOptions::default(),
+    );
+    // An unknown extension might reference accessors: nothing is dropped.
+    let (kept, dropped) = sizes(&kitchen_sink().glb());
+    assert_eq!(kept, dropped);
 }

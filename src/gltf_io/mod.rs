@@ -44,7 +44,7 @@ pub use decode::{
     decode, Asset, AssetSummary, DecodeLimits, MeshSummary, PrimitiveMode, PrimitiveSummary,
     SourceFormat, TrianglePrimitive,
 };
-pub use encode::{encode, EncodeOptions, EncodedAsset, OutputFormat, UvTarget};
+pub use encode::{encode, EncodeOptions, EncodedAsset, OldVertexData, OutputFormat, UvTarget};
 pub use error::{ErrorCode, GltfError};
 pub use uri::Resources;
 
