@@ -972,3 +972,54 @@ fn old_vertex_data_is_dropped_only_when_safe() {
     let (kept, dropped) = sizes(&kitchen_sink().glb());
     assert_eq!(kept, dropped);
 }
+
+/// Removes every `EXT_unknown_thing` extension object from a tree.
+fn strip_unknown(value: &mut Value) {
+    match value {
+        Value::Object(map) => {
+            if let Some(Value::Object(exts)) = map.get_mut("extensions") {
+                exts.remove("EXT_unknown_thing");
+                if exts.is_empty() {
+                    map.remove("extensions");
+                }
+            }
+            map.values_mut().for_each(strip_unknown);
+        }
+        Value::Array(items) => items.iter_mut().for_each(strip_unknown),
+        _ => {}
+    }
+}
+
+#[test]
+fn kitchen_sink_without_unknown_extensions_drops_old_data_and_still_round_trips() {
+    let mut b = kitchen_sink();
+    strip_unknown(&mut b.json);
+    b.json["extensionsUsed"] = json!(["KHR_mesh_quantization", "KHR_materials_sheen"]);
+    let glb = b.glb();
+    for format in [OutputFormat::Glb, OutputFormat::Gltf] {
+        let (_, out, _) = round_trip(
+            &glb,
+            &Resources::new(),
+            EncodeOptions {
+                format,
+                ..EncodeOptions::default()
+            },
+        );
+        let doc = parse(&out);
+        // The skin's inverse bind matrices and the animation's accessors keep their data.
+        let ibm = doc.json["skins"][0]["inverseBindMatrices"]
+            .as_u64()
+            .expect("ibm") as usize;
+        assert_eq!(doc.json["accessors"][ibm]["count"], 2);
+        // Mesh 2's points/lines share POSITION with the rewritten strip: it must survive.
+        let shared = b.json["meshes"][2]["primitives"][0]["attributes"]["POSITION"]
+            .as_u64()
+            .expect("pos") as usize;
+        assert_eq!(doc.json["accessors"][shared], b.json["accessors"][shared]);
+        // The grid's own accessors were dropped.
+        let grid_pos = b.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"]
+            .as_u64()
+            .expect("pos") as usize;
+        assert_eq!(doc.json["accessors"][grid_pos]["count"], 1);
+    }
+}

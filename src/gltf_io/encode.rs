@@ -16,14 +16,16 @@
 //!   `indices`, `targets`, `mode`; appended accessors and buffer views; `bufferViews[*].buffer`
 //!   / `byteOffset` (rebased into one buffer); `buffers` (one buffer); external images (now a
 //!   `bufferView` + `mimeType`). Existing accessors keep their indices and data, so skins,
-//!   animations and unknown extensions that reference them stay valid. The rewritten primitives'
-//!   old accessors stay in the file unused (size is traded for certainty that nothing else
-//!   referenced them).
+//!   animations and unknown extensions that reference them stay valid. The one exception is
+//!   [`OldVertexData::DropWhenSafe`]: accessors that only the rewritten primitives used become
+//!   one-element zero accessors and their bytes leave the buffer, but only when no other
+//!   primitive, skin or animation references them and every extension in the document is known
+//!   not to reference accessors or buffer views.
 //! - Vertex-attribute elements are 4-byte aligned (a padded `byteStride` when an element is not
 //!   a multiple of 4 bytes), as the spec requires; `min`/`max` are recomputed for POSITION
 //!   (attribute and morph target) and wherever the source accessor had them.
 //!
-//! Units: UVs as given (normally [0,1]), written as float VEC2.
+//! Units: UVs as given (normally \[0,1\]), written as float VEC2.
 //!
 //! References: glTF 2.0 spec §3.6.2.4 (data alignment), §3.6.2.5 (accessor bounds: min/max are
 //! raw values, `normalized` has no effect), §3.7.2.1 (primitive modes), §4.4 (GLB).
