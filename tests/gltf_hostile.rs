@@ -87,8 +87,12 @@ fn random_byte_flips_never_panic() {
                     ok += 1;
                     // What decodes must also encode without panicking.
                     let uvs = vec![[[0.25f32, 0.5]; 3]; asset.mesh_input().triangles.len()];
-                    if let Err(e) = encode(&asset, &uvs, &EncodeOptions::default()) {
-                        assert_ne!(e.code, ErrorCode::Internal, "{name}: {e}");
+                    match encode(&asset, &uvs, &EncodeOptions::default()) {
+                        // Whatever we write, we can read back.
+                        Ok(out) => {
+                            assert!(run(&out.bytes).is_ok(), "{name}: output does not decode")
+                        }
+                        Err(e) => assert_ne!(e.code, ErrorCode::Internal, "{name}: {e}"),
                     }
                 }
                 Err(e) => assert_ne!(e.code, ErrorCode::Internal, "{name}: {e}"),
@@ -494,8 +498,16 @@ fn structural_mutations_never_panic() {
                     [[0.5f32, 0.5], [0.0, 0.0], [1.0, 0.0]];
                     asset.mesh_input().triangles.len()
                 ];
-                if let Err(e) = encode(&asset, &uvs, &EncodeOptions::default()) {
-                    assert_ne!(e.code, ErrorCode::Internal, "{e}");
+                match encode(&asset, &uvs, &EncodeOptions::default()) {
+                    Ok(out) => {
+                        let again = run(&out.bytes)
+                            .unwrap_or_else(|e| panic!("output does not decode: {e}\n{}", m.json));
+                        assert_eq!(
+                            again.mesh_input().triangles.len(),
+                            asset.mesh_input().triangles.len()
+                        );
+                    }
+                    Err(e) => assert_ne!(e.code, ErrorCode::Internal, "{e}"),
                 }
             }
             Err(e) => assert_ne!(e.code, ErrorCode::Internal, "{e}\n{}", m.json),

@@ -134,6 +134,14 @@ fn check_round_trip(
                 assert_eq!(out_prim, prim, "points/lines primitive {m}/{p} changed");
                 continue;
             }
+            if asset.face_range(tri_index).is_some_and(|f| f.is_empty()) {
+                assert_eq!(
+                    out_prim, prim,
+                    "primitive {m}/{p} without triangles changed"
+                );
+                tri_index += 1;
+                continue;
+            }
             for (key, value) in prim.as_object().expect("prim") {
                 if !["attributes", "indices", "targets", "mode"].contains(&key.as_str()) {
                     assert_eq!(
@@ -1022,4 +1030,31 @@ fn kitchen_sink_without_unknown_extensions_drops_old_data_and_still_round_trips(
             .expect("pos") as usize;
         assert_eq!(doc.json["accessors"][grid_pos]["count"], 1);
     }
+}
+
+#[test]
+fn a_primitive_without_triangles_is_left_alone() {
+    let mut b = Builder::new();
+    let pos = b.floats(&[[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0]]);
+    let tri = b.floats(&[[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    b.push(
+        "meshes",
+        json!({"primitives": [
+            {"attributes": {"POSITION": pos}, "mode": 5},
+            {"attributes": {"POSITION": tri}}
+        ]}),
+    );
+    b.push("nodes", json!({"mesh": 0}));
+    let glb = b.glb();
+    let (asset, out, _) = round_trip(&glb, &Resources::new(), EncodeOptions::default());
+    assert_eq!(asset.triangle_primitives()[0].faces, 0..0);
+    let doc = parse(&out);
+    assert_eq!(
+        doc.json["meshes"][0]["primitives"][0],
+        b.json["meshes"][0]["primitives"][0]
+    );
+    assert_eq!(
+        doc.json["accessors"][pos], b.json["accessors"][pos],
+        "still referenced, not dropped"
+    );
 }

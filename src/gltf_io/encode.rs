@@ -249,6 +249,11 @@ pub fn encode(
     let reader = Reader::new(&asset.json, &asset.buffers, &asset.limits)?;
     let mut packed_cache: HashMap<usize, Vec<u8>> = HashMap::new();
     for (prim, &uv_set) in asset.primitives.iter().zip(&targets) {
+        // A primitive without triangles (a strip of two vertices) has nothing to carry UVs and
+        // would need zero-element accessors, which glTF forbids: it stays as it was.
+        if prim.faces.is_empty() {
+            continue;
+        }
         let path = format!(
             "/meshes/{}/primitives/{}",
             prim.mesh_index, prim.primitive_index
@@ -456,10 +461,15 @@ fn droppable_accessors(asset: &Asset) -> Vec<usize> {
             }
         }
     };
-    for mesh in array(root, "meshes") {
-        for prim in array(mesh, "primitives") {
-            let triangles = prim.get("mode").and_then(Value::as_u64).unwrap_or(4) >= 4;
-            let flags = if triangles {
+    let rewritten: Vec<(usize, usize)> = asset
+        .primitives
+        .iter()
+        .filter(|p| !p.faces.is_empty())
+        .map(|p| (p.mesh_index, p.primitive_index))
+        .collect();
+    for (m, mesh) in array(root, "meshes").iter().enumerate() {
+        for (p, prim) in array(mesh, "primitives").iter().enumerate() {
+            let flags = if rewritten.contains(&(m, p)) {
                 &mut used_by_rewritten
             } else {
                 &mut used_elsewhere
