@@ -242,6 +242,13 @@ fn forbidden_and_missing_uris() {
         );
         assert!(err.detail.contains(uri), "{}", err.detail);
     }
+    for uri in ["../x.bin", "file:///etc/passwd"] {
+        let err = texatlas::gltf_io::required_resources(&b.gltf_external(uri)).expect_err(uri);
+        assert_eq!(
+            (err.code, err.json_path.as_str()),
+            (ErrorCode::UriForbidden, "/buffers/0/uri")
+        );
+    }
     let err = decode(
         &b.gltf_external("scene.bin"),
         &Resources::new(),

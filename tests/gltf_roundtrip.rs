@@ -10,8 +10,8 @@ use std::collections::BTreeSet;
 use gltf_common::{kitchen_sink, parse, Builder, Doc};
 use serde_json::{json, Value};
 use texatlas::gltf_io::{
-    decode, encode, Asset, DecodeLimits, EncodeOptions, ErrorCode, OldVertexData, OutputFormat,
-    PrimitiveMode, Resources, SourceFormat, UvTarget,
+    decode, encode, required_resources, Asset, DecodeLimits, EncodeOptions, ErrorCode,
+    OldVertexData, OutputFormat, PrimitiveMode, Resources, SourceFormat, UvTarget,
 };
 
 fn fixture(name: &str) -> Vec<u8> {
@@ -638,8 +638,22 @@ fn external_buffer_and_image_from_resources_are_embedded() {
         (ErrorCode::ResourceMissing, "/buffers/0/uri")
     );
 
+    // The caller can ask which files to supply, before decoding.
+    assert_eq!(
+        required_resources(&gltf).expect("scan"),
+        vec!["scene.bin".to_string(), "tex/wood%20grain.png".to_string()]
+    );
+    assert!(
+        required_resources(&b.glb()).expect("scan").len() == 1,
+        "only the image"
+    );
+
     let (asset, out, _) = round_trip(&gltf, &resources, EncodeOptions::default());
     assert_eq!(asset.source_format(), SourceFormat::Gltf);
+    assert!(
+        required_resources(&out).expect("scan").is_empty(),
+        "everything embedded"
+    );
     let doc = parse(&out);
     let image = &doc.json["images"][0];
     assert!(image.get("uri").is_none());

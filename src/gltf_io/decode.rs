@@ -30,7 +30,7 @@ use super::error::{
     offset_of_line_column, pointer_at_offset, pointer_from_gltf_path, ErrorCode, GltfError,
 };
 use super::glb;
-use super::uri::{resolve, Resolved, Resources};
+use super::uri::{check_relative, resolve, Resolved, Resources};
 use crate::mesh::MeshInput;
 
 /// Bounds on what one decode may allocate. Defaults keep a decode under about 1 GB.
@@ -294,14 +294,46 @@ pub fn decode(
     }
 }
 
-fn decode_unguarded(
-    bytes: &[u8],
-    resources: &Resources,
-    limits: &DecodeLimits,
-) -> Result<Asset, GltfError> {
-    let (json_bytes, bin, format) = if glb::is_glb(bytes) {
+/// The relative URIs (buffers, then images, in document order, without duplicates) that
+/// [`decode`] will look up in [`Resources`], so a caller (CLI, upload handler) can supply
+/// exactly those. `data:` URIs are skipped; forbidden URIs (`..`, absolute paths, schemes) are
+/// an error here already. Only the container and the JSON are parsed.
+pub fn required_resources(bytes: &[u8]) -> Result<Vec<String>, GltfError> {
+    let result = catch_unwind(AssertUnwindSafe(|| -> Result<Vec<String>, GltfError> {
+        let (json_bytes, _, _) = split_container(bytes)?;
+        let root = parse_json(json_bytes)?;
+        let mut uris: Vec<String> = Vec::new();
+        for key in ["buffers", "images"] {
+            for (i, item) in array(&root, key).iter().enumerate() {
+                let Some(uri) = item.get("uri").and_then(Value::as_str) else {
+                    continue;
+                };
+                if uri.starts_with("data:") {
+                    continue;
+                }
+                check_relative(uri, &format!("/{key}/{i}/uri"))?;
+                if !uris.iter().any(|u| u == uri) {
+                    uris.push(uri.to_string());
+                }
+            }
+        }
+        Ok(uris)
+    }));
+    result.unwrap_or_else(|_| {
+        Err(GltfError::new(
+            ErrorCode::Internal,
+            "",
+            "the URI scan panicked",
+            "report this input as a bug",
+        ))
+    })
+}
+
+/// The JSON text and BIN chunk of a `.glb`, or the text of a `.gltf`.
+fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>, SourceFormat), GltfError> {
+    if glb::is_glb(bytes) {
         let parts = glb::parse_glb(bytes)?;
-        (parts.json, parts.bin, SourceFormat::Glb)
+        Ok((parts.json, parts.bin, SourceFormat::Glb))
     } else {
         let text = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
         if text.iter().find(|b| !b.is_ascii_whitespace()) != Some(&b'{') {
@@ -312,8 +344,16 @@ fn decode_unguarded(
                 "send a .glb file or a .gltf JSON file",
             ));
         }
-        (text, None, SourceFormat::Gltf)
-    };
+        Ok((text, None, SourceFormat::Gltf))
+    }
+}
+
+fn decode_unguarded(
+    bytes: &[u8],
+    resources: &Resources,
+    limits: &DecodeLimits,
+) -> Result<Asset, GltfError> {
+    let (json_bytes, bin, format) = split_container(bytes)?;
     let root = parse_json(json_bytes)?;
     check_version(&root)?;
     check_primitive_references(&root)?;

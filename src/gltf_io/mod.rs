@@ -43,8 +43,8 @@ mod glb;
 mod uri;
 
 pub use decode::{
-    decode, Asset, AssetSummary, DecodeLimits, MeshSummary, PrimitiveMode, PrimitiveSummary,
-    SourceFormat, TrianglePrimitive,
+    decode, required_resources, Asset, AssetSummary, DecodeLimits, MeshSummary, PrimitiveMode,
+    PrimitiveSummary, SourceFormat, TrianglePrimitive,
 };
 pub use encode::{encode, EncodeOptions, EncodedAsset, OldVertexData, OutputFormat, UvTarget};
 pub use error::{ErrorCode, GltfError};

@@ -104,7 +104,7 @@ pub(crate) fn resolve<'a>(
     })
 }
 
-fn check_relative(uri: &str, path: &str) -> Result<(), GltfError> {
+pub(crate) fn check_relative(uri: &str, path: &str) -> Result<(), GltfError> {
     let forbidden = |why: &str| {
         GltfError::new(
             ErrorCode::UriForbidden,
