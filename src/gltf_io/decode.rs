@@ -300,8 +300,7 @@ pub fn decode(
 /// an error here already. Only the container and the JSON are parsed.
 pub fn required_resources(bytes: &[u8]) -> Result<Vec<String>, GltfError> {
     let result = catch_unwind(AssertUnwindSafe(|| -> Result<Vec<String>, GltfError> {
-        let (json_bytes, _, _) = split_container(bytes)?;
-        let root = parse_json(json_bytes)?;
+        let root = parse_json(split_container(bytes)?.json)?;
         let mut uris: Vec<String> = Vec::new();
         for key in ["buffers", "images"] {
             for (i, item) in array(&root, key).iter().enumerate() {
@@ -330,10 +329,20 @@ pub fn required_resources(bytes: &[u8]) -> Result<Vec<String>, GltfError> {
 }
 
 /// The JSON text and BIN chunk of a `.glb`, or the text of a `.gltf`.
-fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>, SourceFormat), GltfError> {
+struct Container<'a> {
+    json: &'a [u8],
+    bin: Option<&'a [u8]>,
+    format: SourceFormat,
+}
+
+fn split_container(bytes: &[u8]) -> Result<Container<'_>, GltfError> {
     if glb::is_glb(bytes) {
         let parts = glb::parse_glb(bytes)?;
-        Ok((parts.json, parts.bin, SourceFormat::Glb))
+        Ok(Container {
+            json: parts.json,
+            bin: parts.bin,
+            format: SourceFormat::Glb,
+        })
     } else {
         let text = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
         if text.iter().find(|b| !b.is_ascii_whitespace()) != Some(&b'{') {
@@ -344,7 +353,11 @@ fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>, SourceFormat),
                 "send a .glb file or a .gltf JSON file",
             ));
         }
-        Ok((text, None, SourceFormat::Gltf))
+        Ok(Container {
+            json: text,
+            bin: None,
+            format: SourceFormat::Gltf,
+        })
     }
 }
 
@@ -353,7 +366,11 @@ fn decode_unguarded(
     resources: &Resources,
     limits: &DecodeLimits,
 ) -> Result<Asset, GltfError> {
-    let (json_bytes, bin, format) = split_container(bytes)?;
+    let Container {
+        json: json_bytes,
+        bin,
+        format,
+    } = split_container(bytes)?;
     let root = parse_json(json_bytes)?;
     check_version(&root)?;
     check_primitive_references(&root)?;
