@@ -7,11 +7,11 @@ mod gltf_common;
 
 use std::collections::BTreeSet;
 
-use gltf_common::{parse, Builder, Doc};
+use gltf_common::{kitchen_sink, parse, Builder, Doc};
 use serde_json::{json, Value};
 use texatlas::gltf_io::{
-    decode, encode, Asset, DecodeLimits, EncodeOptions, ErrorCode, OutputFormat, PrimitiveMode,
-    Resources, SourceFormat, UvTarget,
+    decode, encode, required_resources, Asset, DecodeLimits, EncodeOptions, ErrorCode,
+    OldVertexData, OutputFormat, PrimitiveMode, Resources, SourceFormat, UvTarget,
 };
 
 fn fixture(name: &str) -> Vec<u8> {
@@ -59,18 +59,36 @@ fn check_round_trip(
             assert_eq!(out.json.get(key), Some(value), "top-level `{key}` changed");
         }
     }
-    // 2. Existing accessors keep their index, JSON (except the rebased view) and data.
+    // 2. Existing accessors keep their index, JSON and data, except old vertex data that was
+    //    dropped: then the accessor is a one-element zero accessor that nothing references.
     let in_accessors = input.json["accessors"]
         .as_array()
         .cloned()
         .unwrap_or_default();
+    let referenced = referenced_accessors(&out.json);
     for (i, a) in in_accessors.iter().enumerate() {
-        assert_eq!(a, &out.json["accessors"][i], "accessor {i} JSON changed");
-        assert_eq!(
-            input.elements(i),
-            out.elements(i),
-            "accessor {i} data changed"
-        );
+        let o = &out.json["accessors"][i];
+        if o == a {
+            assert_eq!(
+                input.elements(i),
+                out.elements(i),
+                "accessor {i} data changed"
+            );
+        } else {
+            assert!(
+                !referenced.contains(&i),
+                "accessor {i} changed but is still referenced"
+            );
+            assert_eq!(
+                (o["count"].as_u64(), o.get("bufferView")),
+                (Some(1), None),
+                "accessor {i}: {o}"
+            );
+            assert_eq!(
+                (&o["componentType"], &o["type"]),
+                (&a["componentType"], &a["type"])
+            );
+        }
     }
     // 3. Images keep every property (external ones may have gained bufferView/mimeType).
     for (i, image) in input.json["images"]
@@ -114,6 +132,14 @@ fn check_round_trip(
             let mode = prim.get("mode").and_then(Value::as_u64).unwrap_or(4);
             if mode < 4 {
                 assert_eq!(out_prim, prim, "points/lines primitive {m}/{p} changed");
+                continue;
+            }
+            if asset.face_range(tri_index).is_some_and(|f| f.is_empty()) {
+                assert_eq!(
+                    out_prim, prim,
+                    "primitive {m}/{p} without triangles changed"
+                );
+                tri_index += 1;
                 continue;
             }
             for (key, value) in prim.as_object().expect("prim") {
@@ -187,6 +213,42 @@ fn check_round_trip(
         }
     }
     assert_eq!(tri_index, asset.triangle_primitives().len());
+}
+
+/// Every accessor index the document references from primitives, skins and animations.
+fn referenced_accessors(json: &Value) -> BTreeSet<usize> {
+    let mut out = BTreeSet::new();
+    let mut add = |v: &Value| {
+        if let Some(i) = v.as_u64() {
+            out.insert(i as usize);
+        }
+    };
+    for mesh in json["meshes"].as_array().into_iter().flatten() {
+        for prim in mesh["primitives"].as_array().into_iter().flatten() {
+            prim["attributes"]
+                .as_object()
+                .into_iter()
+                .flatten()
+                .for_each(|(_, v)| add(v));
+            add(&prim["indices"]);
+            for t in prim["targets"].as_array().into_iter().flatten() {
+                t.as_object()
+                    .into_iter()
+                    .flatten()
+                    .for_each(|(_, v)| add(v));
+            }
+        }
+    }
+    for skin in json["skins"].as_array().into_iter().flatten() {
+        add(&skin["inverseBindMatrices"]);
+    }
+    for anim in json["animations"].as_array().into_iter().flatten() {
+        for sampler in anim["samplers"].as_array().into_iter().flatten() {
+            add(&sampler["input"]);
+            add(&sampler["output"]);
+        }
+    }
+    out
 }
 
 /// decode → UVs → encode → independent check → decode again (same triangles, same positions).
@@ -317,213 +379,6 @@ fn strip_and_fan_expand_in_spec_order() {
         };
         assert_eq!(asset.mesh_input().triangles, expected, "{name}");
     }
-}
-
-/// A generated asset with what the corpus lacks: interleaving, sparse (with and without a
-/// buffer view), quantized and normalized integers, a custom attribute, colours, joints and
-/// weights, morph targets, instancing, points/lines, a strip with indices, unknown extensions
-/// and extras at every level, a skin and an animation that reference accessors.
-fn kitchen_sink() -> Builder {
-    let mut b = Builder::new();
-    let ext = |tag: &str| json!({"EXT_unknown_thing": {"tag": tag, "nested": {"list": [1, 2.5, null, {"deep": true}]}}});
-    let extras = |tag: &str| json!({"note": tag, "ids": [7, 8]});
-
-    // Mesh 0: 3x3 grid, 8 triangles, u8 indices.
-    let mut interleaved = Vec::new();
-    let mut positions = Vec::new();
-    for j in 0..3 {
-        for i in 0..3 {
-            let p = [i as f32, j as f32, 0.1 * (i * j) as f32];
-            positions.push(p);
-            for x in p.iter().chain(&[0.0f32, 0.0, 1.0]) {
-                interleaved.extend_from_slice(&x.to_le_bytes());
-            }
-        }
-    }
-    let iv = b.view(&interleaved, Some(24));
-    let min = [0.0f32, 0.0, 0.0];
-    let max = [2.0f32, 2.0, 0.4];
-    let pos = b.push("accessors", json!({"bufferView": iv, "componentType": 5126, "count": 9, "type": "VEC3", "min": min, "max": max, "extras": extras("pos"), "extensions": ext("accessor")}));
-    let nrm = b.push("accessors", json!({"bufferView": iv, "byteOffset": 12, "componentType": 5126, "count": 9, "type": "VEC3"}));
-    let uv0: Vec<u8> = (0..9u16)
-        .flat_map(|v| [v * 7000, 65535 - v * 3000])
-        .flat_map(u16::to_le_bytes)
-        .collect();
-    let uvv = b.view(&uv0, None);
-    let tex0 = b.push("accessors", json!({"bufferView": uvv, "componentType": 5123, "normalized": true, "count": 9, "type": "VEC2"}));
-    let colors: Vec<u8> = (0..9u8).flat_map(|v| [v * 20, 255 - v, v, 255]).collect();
-    let cv = b.view(&colors, None);
-    let sparse_idx = b.view(&[2u8, 7], None);
-    let sparse_val = b.view(&[1u8, 2, 3, 4, 5, 6, 7, 8], None);
-    let color0 = b.push("accessors", json!({"bufferView": cv, "componentType": 5121, "normalized": true, "count": 9, "type": "VEC4",
-        "sparse": {"count": 2, "indices": {"bufferView": sparse_idx, "componentType": 5121}, "values": {"bufferView": sparse_val}}}));
-    let sparse_idx1 = b.view(
-        &[1u16.to_le_bytes(), 4u16.to_le_bytes(), 8u16.to_le_bytes()].concat(),
-        None,
-    );
-    let sparse_val1 = b.view(&[200u8, 100, 50, 1, 2, 3, 9, 9, 9], None);
-    let color1 = b.push("accessors", json!({"componentType": 5121, "normalized": true, "count": 9, "type": "VEC3",
-        "sparse": {"count": 3, "indices": {"bufferView": sparse_idx1, "componentType": 5123}, "values": {"bufferView": sparse_val1}}}));
-    // 2-byte elements at a 4-byte stride, as vertex attributes must be.
-    let foo: Vec<u8> = (0..9u16)
-        .flat_map(|v| (1000 + v).to_le_bytes().into_iter().chain([0, 0]))
-        .collect();
-    let fv = b.view(&foo, Some(4));
-    let foo = b.push(
-        "accessors",
-        json!({"bufferView": fv, "componentType": 5123, "count": 9, "type": "SCALAR"}),
-    );
-    let joints: Vec<u8> = (0..9u8).flat_map(|_| [0, 1, 0, 0]).collect();
-    let jv = b.view(&joints, None);
-    let joints = b.push(
-        "accessors",
-        json!({"bufferView": jv, "componentType": 5121, "count": 9, "type": "VEC4"}),
-    );
-    let weights: Vec<[f32; 4]> = (0..9)
-        .map(|v| [0.5 + v as f32 * 0.05, 0.5 - v as f32 * 0.05, 0.0, 0.0])
-        .collect();
-    let weights = b.floats(&weights);
-    let t0_idx = b.view(&[0u8, 4, 8, 0], None);
-    let t0_val_data: Vec<u8> = [[0.0f32, 0.0, 1.0], [0.0, 0.5, 0.5], [1.0, 0.0, 0.0]]
-        .iter()
-        .flatten()
-        .flat_map(|x| x.to_le_bytes())
-        .collect();
-    let t0_val = b.view(&t0_val_data, None);
-    let target0_pos = b.push("accessors", json!({"componentType": 5126, "count": 9, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 0.5, 1.0],
-        "sparse": {"count": 3, "indices": {"bufferView": t0_idx, "componentType": 5121}, "values": {"bufferView": t0_val}}}));
-    let target0_nrm = b.floats(
-        &(0..9)
-            .map(|v| [0.0f32, 0.01 * v as f32, 0.0])
-            .collect::<Vec<_>>(),
-    );
-    let target1_pos = b.floats(
-        &(0..9)
-            .map(|v| [0.1 * v as f32, 0.0, 0.0])
-            .collect::<Vec<_>>(),
-    );
-    let idx: Vec<u8> = vec![
-        0, 1, 4, 0, 4, 3, 1, 2, 5, 1, 5, 4, 3, 4, 7, 3, 7, 6, 4, 5, 8, 4, 8, 7,
-    ];
-    let iv8 = b.view(&idx, None);
-    let indices = b.push(
-        "accessors",
-        json!({"bufferView": iv8, "componentType": 5121, "count": 24, "type": "SCALAR"}),
-    );
-    b.push("meshes", json!({
-        "name": "sink",
-        "weights": [0.5, 0.25],
-        "primitives": [{
-            "attributes": {"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": tex0, "COLOR_0": color0, "COLOR_1": color1,
-                           "_FOO": foo, "JOINTS_0": joints, "WEIGHTS_0": weights},
-            "indices": indices,
-            "material": 0,
-            "targets": [{"POSITION": target0_pos, "NORMAL": target0_nrm}, {"POSITION": target1_pos}],
-            "extensions": ext("primitive"),
-            "extras": extras("primitive")
-        }],
-        "extensions": ext("mesh"),
-        "extras": extras("mesh")
-    }));
-
-    // Mesh 1: quantized positions (i16 normalized, 6-byte elements at stride 8), a fan.
-    let q: Vec<[i16; 3]> = vec![
-        [0, 0, 0],
-        [32767, 0, 0],
-        [20000, 20000, 0],
-        [0, 32767, 0],
-        [-32767, 100, 5],
-    ];
-    let qbytes: Vec<u8> = q
-        .iter()
-        .flat_map(|p| p.iter().flat_map(|c| c.to_le_bytes()).chain([0, 0]))
-        .collect();
-    let qv = b.view(&qbytes, Some(8));
-    let qpos = b.push("accessors", json!({"bufferView": qv, "componentType": 5122, "normalized": true, "count": 5, "type": "VEC3",
-        "min": [-32767, 0, 0], "max": [32767, 32767, 5]}));
-    b.push(
-        "meshes",
-        json!({"name": "quantized", "primitives": [{"attributes": {"POSITION": qpos}, "mode": 6}]}),
-    );
-
-    // Mesh 2: points, lines, and a strip with u32 indices.
-    let ppos = b.floats(&[
-        [0.0f32, 0.0, 0.0],
-        [1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        [1.0, 1.0, 0.5],
-    ]);
-    let line_idx = b.indices(&[0, 1, 1, 3]);
-    let strip_bytes: Vec<u8> = [0u32, 1, 2, 3]
-        .iter()
-        .flat_map(|i| i.to_le_bytes())
-        .collect();
-    let sv = b.view(&strip_bytes, None);
-    let strip_idx = b.push(
-        "accessors",
-        json!({"bufferView": sv, "componentType": 5125, "count": 4, "type": "SCALAR"}),
-    );
-    b.push("meshes", json!({"name": "mixed", "primitives": [
-        {"attributes": {"POSITION": ppos}, "mode": 0},
-        {"attributes": {"POSITION": ppos}, "indices": line_idx, "mode": 1, "extras": extras("lines")},
-        {"attributes": {"POSITION": ppos}, "indices": strip_idx, "mode": 5}
-    ]}));
-
-    // Skin and animation referencing accessors that encode must not renumber.
-    let ibm: Vec<[f32; 4]> = vec![
-        [1.0, 0.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0, 0.0],
-        [0.0, 0.0, 1.0, 0.0],
-        [0.0, 0.0, 0.0, 1.0],
-    ];
-    let ibm_bytes: Vec<u8> = ibm
-        .iter()
-        .chain(&ibm)
-        .flatten()
-        .flat_map(|x| x.to_le_bytes())
-        .collect();
-    let ibmv = b.view(&ibm_bytes, None);
-    let ibm = b.push(
-        "accessors",
-        json!({"bufferView": ibmv, "componentType": 5126, "count": 2, "type": "MAT4"}),
-    );
-    let times = b.floats(&[[0.0f32], [1.0]]);
-    let values = b.floats(&[[0.0f32, 0.0, 0.0], [0.0, 1.0, 0.0]]);
-    b.push("materials", json!({"name": "m", "pbrMetallicRoughness": {"baseColorFactor": [1, 0.5, 0.25, 1]},
-        "extensions": {"KHR_materials_sheen": {"sheenRoughnessFactor": 0.5}, "EXT_unknown_thing": {"a": 1}}, "extras": extras("material")}));
-    b.push("nodes", json!({"name": "sink-a", "mesh": 0, "skin": 0, "extensions": ext("node"), "extras": extras("node")}));
-    b.push("nodes", json!({"name": "sink-b", "mesh": 0, "skin": 0}));
-    b.push(
-        "nodes",
-        json!({"name": "quantized", "mesh": 1, "scale": [0.001, 0.001, 0.001]}),
-    );
-    b.push("nodes", json!({"name": "mixed", "mesh": 2, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 5, 0, 0, 1]}));
-    b.push("nodes", json!({"name": "joint0", "children": [5]}));
-    b.push("nodes", json!({"name": "joint1"}));
-    b.push("nodes", json!({"name": "root", "children": [2, 3, 4]}));
-    b.push(
-        "skins",
-        json!({"joints": [4, 5], "inverseBindMatrices": ibm, "extras": extras("skin")}),
-    );
-    b.push(
-        "animations",
-        json!({"channels": [{"sampler": 0, "target": {"node": 4, "path": "translation"}}],
-        "samplers": [{"input": times, "output": values}]}),
-    );
-    b.push(
-        "scenes",
-        json!({"nodes": [0, 1, 6], "extensions": ext("scene")}),
-    );
-    b.json["scene"] = json!(0);
-    b.json["extensionsUsed"] = json!([
-        "EXT_unknown_thing",
-        "KHR_mesh_quantization",
-        "KHR_materials_sheen"
-    ]);
-    b.json["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
-    b.json["extensions"] = ext("root");
-    b.json["extras"] = extras("root");
-    b
 }
 
 #[test]
@@ -783,8 +638,22 @@ fn external_buffer_and_image_from_resources_are_embedded() {
         (ErrorCode::ResourceMissing, "/buffers/0/uri")
     );
 
+    // The caller can ask which files to supply, before decoding.
+    assert_eq!(
+        required_resources(&gltf).expect("scan"),
+        vec!["scene.bin".to_string(), "tex/wood%20grain.png".to_string()]
+    );
+    assert!(
+        required_resources(&b.glb()).expect("scan").len() == 1,
+        "only the image"
+    );
+
     let (asset, out, _) = round_trip(&gltf, &resources, EncodeOptions::default());
     assert_eq!(asset.source_format(), SourceFormat::Gltf);
+    assert!(
+        required_resources(&out).expect("scan").is_empty(),
+        "everything embedded"
+    );
     let doc = parse(&out);
     let image = &doc.json["images"][0];
     assert!(image.get("uri").is_none());
@@ -870,4 +739,218 @@ fn encoding_is_deterministic() {
     let a = encode(&asset, &uvs, &EncodeOptions::default()).expect("encodes");
     let b = encode(&asset, &uvs, &EncodeOptions::default()).expect("encodes");
     assert_eq!(a, b);
+}
+
+#[test]
+fn old_vertex_data_is_dropped_only_when_safe() {
+    let sizes = |bytes: &[u8]| {
+        let asset = decode(bytes, &Resources::new(), &DecodeLimits::default()).expect("decodes");
+        let uvs = test_uvs(&asset);
+        let keep = EncodeOptions {
+            old_vertex_data: OldVertexData::Keep,
+            ..EncodeOptions::default()
+        };
+        let kept = encode(&asset, &uvs, &keep).expect("encodes").bytes;
+        let dropped = encode(&asset, &uvs, &EncodeOptions::default())
+            .expect("encodes")
+            .bytes;
+        (kept, dropped)
+    };
+    // Box: no extensions, nothing else references the mesh accessors → dropped, file smaller.
+    let (kept, dropped) = sizes(&fixture("Box.glb"));
+    assert!(
+        dropped.len() < kept.len(),
+        "{} !< {}",
+        dropped.len(),
+        kept.len()
+    );
+    let doc = parse(&dropped);
+    assert_eq!(
+        doc.json["accessors"][0]["count"], 1,
+        "old accessor reduced to a zero accessor"
+    );
+    let (_, out, _) = round_trip(
+        &fixture("Box.glb"),
+        &Resources::new(),
+        EncodeOptions::default(),
+    );
+    assert_eq!(parse(&out).json["accessors"][0]["count"], 1);
+    // SimpleSkin: skin and animation accessors stay intact (checked by `round_trip`).
+    let (kept, dropped) = sizes(&fixture("SimpleSkin.glb"));
+    assert!(dropped.len() < kept.len());
+    round_trip(
+        &fixture("SimpleSkin.glb"),
+        &Resources::new(),
+        EncodeOptions::default(),
+    );
+    // An unknown extension might reference accessors: nothing is dropped.
+    let (kept, dropped) = sizes(&kitchen_sink().glb());
+    assert_eq!(kept, dropped);
+}
+
+/// Removes every `EXT_unknown_thing` extension object from a tree.
+fn strip_unknown(value: &mut Value) {
+    match value {
+        Value::Object(map) => {
+            if let Some(Value::Object(exts)) = map.get_mut("extensions") {
+                exts.remove("EXT_unknown_thing");
+                if exts.is_empty() {
+                    map.remove("extensions");
+                }
+            }
+            map.values_mut().for_each(strip_unknown);
+        }
+        Value::Array(items) => items.iter_mut().for_each(strip_unknown),
+        _ => {}
+    }
+}
+
+#[test]
+fn kitchen_sink_without_unknown_extensions_drops_old_data_and_still_round_trips() {
+    let mut b = kitchen_sink();
+    strip_unknown(&mut b.json);
+    b.json["extensionsUsed"] = json!(["KHR_mesh_quantization", "KHR_materials_sheen"]);
+    let glb = b.glb();
+    for format in [OutputFormat::Glb, OutputFormat::Gltf] {
+        let (_, out, _) = round_trip(
+            &glb,
+            &Resources::new(),
+            EncodeOptions {
+                format,
+                ..EncodeOptions::default()
+            },
+        );
+        let doc = parse(&out);
+        // The skin's inverse bind matrices and the animation's accessors keep their data.
+        let ibm = doc.json["skins"][0]["inverseBindMatrices"]
+            .as_u64()
+            .expect("ibm") as usize;
+        assert_eq!(doc.json["accessors"][ibm]["count"], 2);
+        // Mesh 2's points/lines share POSITION with the rewritten strip: it must survive.
+        let shared = b.json["meshes"][2]["primitives"][0]["attributes"]["POSITION"]
+            .as_u64()
+            .expect("pos") as usize;
+        assert_eq!(doc.json["accessors"][shared], b.json["accessors"][shared]);
+        // The grid's own accessors were dropped.
+        let grid_pos = b.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"]
+            .as_u64()
+            .expect("pos") as usize;
+        assert_eq!(doc.json["accessors"][grid_pos]["count"], 1);
+    }
+}
+
+#[test]
+fn a_primitive_without_triangles_is_left_alone() {
+    let mut b = Builder::new();
+    let pos = b.floats(&[[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0]]);
+    let tri = b.floats(&[[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    b.push(
+        "meshes",
+        json!({"primitives": [
+            {"attributes": {"POSITION": pos}, "mode": 5},
+            {"attributes": {"POSITION": tri}}
+        ]}),
+    );
+    b.push("nodes", json!({"mesh": 0}));
+    let glb = b.glb();
+    let (asset, out, _) = round_trip(&glb, &Resources::new(), EncodeOptions::default());
+    assert_eq!(asset.triangle_primitives()[0].faces, 0..0);
+    let doc = parse(&out);
+    assert_eq!(
+        doc.json["meshes"][0]["primitives"][0],
+        b.json["meshes"][0]["primitives"][0]
+    );
+    assert_eq!(
+        doc.json["accessors"][pos], b.json["accessors"][pos],
+        "still referenced, not dropped"
+    );
+}
+
+mod properties {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A random primitive: vertex count, mode, optional index stream, normals or not.
+    fn primitive() -> impl Strategy<Value = (usize, u64, Option<Vec<u32>>, bool)> {
+        (
+            3usize..24,
+            prop_oneof![Just(4u64), Just(5), Just(6)],
+            any::<bool>(),
+            any::<bool>(),
+        )
+            .prop_flat_map(|(n, mode, indexed, normals)| {
+                // A non-indexed list needs a multiple of 3 vertices.
+                let n = if mode == 4 && !indexed { n / 3 * 3 } else { n };
+                // Lists: a multiple of 3 indices (truncated from up to 60); strips/fans: 3..30.
+                let stream = prop::collection::vec(0..n as u32, 3..60).prop_map(move |mut v| {
+                    if mode == 4 {
+                        v.truncate(v.len() / 3 * 3);
+                    } else {
+                        v.truncate(30);
+                    }
+                    v
+                });
+                let indices = if indexed {
+                    stream.prop_map(Some).boxed()
+                } else {
+                    Just(None).boxed()
+                };
+                (Just(n), Just(mode), indices, Just(normals))
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+        /// Any small mesh (lists, strips, fans; indexed or not) and any per-corner UVs drawn
+        /// from a small palette (so some corners share UVs and some split): the triangle count
+        /// and every per-corner value survive, vertices are split minimally.
+        #[test]
+        fn any_mesh_and_uvs_round_trip(
+            prims in prop::collection::vec(primitive(), 1..3),
+            palette in prop::collection::vec((0u8..4, 0u8..4), 256),
+        ) {
+            let mut b = Builder::new();
+            let mut gltf_prims = Vec::new();
+            for (p, (n, mode, indices, normals)) in prims.iter().enumerate() {
+                let pos: Vec<[f32; 3]> = (0..*n).map(|i| [i as f32, (i * i % 7) as f32, p as f32]).collect();
+                let pos = b.floats(&pos);
+                let mut attributes = json!({"POSITION": pos});
+                if *normals {
+                    let nrm: Vec<[f32; 3]> = (0..*n).map(|i| [0.0, (i % 2) as f32, 1.0 - (i % 2) as f32]).collect();
+                    attributes["NORMAL"] = json!(b.floats(&nrm));
+                }
+                let mut prim = json!({"attributes": attributes, "mode": mode});
+                if let Some(indices) = indices {
+                    prim["indices"] = json!(b.indices(indices));
+                }
+                gltf_prims.push(prim);
+            }
+            b.push("meshes", json!({"primitives": gltf_prims}));
+            b.push("nodes", json!({"mesh": 0}));
+            let glb = b.glb();
+            let input = parse(&glb);
+            let asset = decode(&glb, &Resources::new(), &DecodeLimits::default()).expect("decodes");
+            // Triangles match the independent expansion, primitive by primitive.
+            for (k, prim) in asset.triangle_primitives().iter().enumerate() {
+                let corners = input.corners(&input.json["meshes"][0]["primitives"][k]);
+                let ours: Vec<[usize; 3]> = asset.mesh_input().triangles[prim.faces.clone()]
+                    .iter()
+                    .map(|t| t.map(|v| (v - prim.vertex_start) as usize))
+                    .collect();
+                prop_assert_eq!(ours, corners);
+            }
+            let uvs: Vec<[[f32; 2]; 3]> = (0..asset.mesh_input().triangles.len())
+                .map(|f| {
+                    let uv = |c: usize| {
+                        let (u, v) = palette[(3 * f + c) % palette.len()];
+                        [f32::from(u) * 0.25, f32::from(v) * 0.25]
+                    };
+                    [uv(0), uv(1), uv(2)]
+                })
+                .collect();
+            let encoded = encode(&asset, &uvs, &EncodeOptions::default()).expect("encodes");
+            check_round_trip(&input, &asset, &uvs, &encoded.bytes, &encoded.uv_set_per_primitive, false);
+        }
+    }
 }

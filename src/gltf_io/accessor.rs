@@ -77,7 +77,7 @@ impl ComponentType {
         }
     }
 
-    /// The value as a consumer sees it: normalized integers map to [0,1] or [-1,1] by the
+    /// The value as a consumer sees it: normalized integers map to \[0,1\] or \[-1,1\] by the
     /// spec's formulas (§3.11), e.g. `max(c / 127, -1)` for signed bytes.
     pub(crate) fn value(self, bytes: &[u8], normalized: bool) -> f64 {
         let raw = self.raw(bytes);

@@ -26,9 +26,11 @@ use gltf_json::validation::Validate as _;
 use serde_json::Value;
 
 use super::accessor::{array, field_u64, ComponentType, Reader};
-use super::error::{pointer_from_gltf_path, ErrorCode, GltfError};
+use super::error::{
+    offset_of_line_column, pointer_at_offset, pointer_from_gltf_path, ErrorCode, GltfError,
+};
 use super::glb;
-use super::uri::{resolve, Resolved, Resources};
+use super::uri::{check_relative, resolve, Resolved, Resources};
 use crate::mesh::MeshInput;
 
 /// Bounds on what one decode may allocate. Defaults keep a decode under about 1 GB.
@@ -292,14 +294,55 @@ pub fn decode(
     }
 }
 
-fn decode_unguarded(
-    bytes: &[u8],
-    resources: &Resources,
-    limits: &DecodeLimits,
-) -> Result<Asset, GltfError> {
-    let (json_bytes, bin, format) = if glb::is_glb(bytes) {
+/// The relative URIs (buffers, then images, in document order, without duplicates) that
+/// [`decode`] will look up in [`Resources`], so a caller (CLI, upload handler) can supply
+/// exactly those. `data:` URIs are skipped; forbidden URIs (`..`, absolute paths, schemes) are
+/// an error here already. Only the container and the JSON are parsed.
+pub fn required_resources(bytes: &[u8]) -> Result<Vec<String>, GltfError> {
+    let result = catch_unwind(AssertUnwindSafe(|| -> Result<Vec<String>, GltfError> {
+        let root = parse_json(split_container(bytes)?.json)?;
+        let mut uris: Vec<String> = Vec::new();
+        for key in ["buffers", "images"] {
+            for (i, item) in array(&root, key).iter().enumerate() {
+                let Some(uri) = item.get("uri").and_then(Value::as_str) else {
+                    continue;
+                };
+                if uri.starts_with("data:") {
+                    continue;
+                }
+                check_relative(uri, &format!("/{key}/{i}/uri"))?;
+                if !uris.iter().any(|u| u == uri) {
+                    uris.push(uri.to_string());
+                }
+            }
+        }
+        Ok(uris)
+    }));
+    result.unwrap_or_else(|_| {
+        Err(GltfError::new(
+            ErrorCode::Internal,
+            "",
+            "the URI scan panicked",
+            "report this input as a bug",
+        ))
+    })
+}
+
+/// The JSON text and BIN chunk of a `.glb`, or the text of a `.gltf`.
+struct Container<'a> {
+    json: &'a [u8],
+    bin: Option<&'a [u8]>,
+    format: SourceFormat,
+}
+
+fn split_container(bytes: &[u8]) -> Result<Container<'_>, GltfError> {
+    if glb::is_glb(bytes) {
         let parts = glb::parse_glb(bytes)?;
-        (parts.json, parts.bin, SourceFormat::Glb)
+        Ok(Container {
+            json: parts.json,
+            bin: parts.bin,
+            format: SourceFormat::Glb,
+        })
     } else {
         let text = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
         if text.iter().find(|b| !b.is_ascii_whitespace()) != Some(&b'{') {
@@ -310,10 +353,27 @@ fn decode_unguarded(
                 "send a .glb file or a .gltf JSON file",
             ));
         }
-        (text, None, SourceFormat::Gltf)
-    };
+        Ok(Container {
+            json: text,
+            bin: None,
+            format: SourceFormat::Gltf,
+        })
+    }
+}
+
+fn decode_unguarded(
+    bytes: &[u8],
+    resources: &Resources,
+    limits: &DecodeLimits,
+) -> Result<Asset, GltfError> {
+    let Container {
+        json: json_bytes,
+        bin,
+        format,
+    } = split_container(bytes)?;
     let root = parse_json(json_bytes)?;
     check_version(&root)?;
+    check_primitive_references(&root)?;
     check_schema(json_bytes)?;
     check_extensions(&root)?;
     check_nodes(&root)?;
@@ -390,13 +450,50 @@ fn check_version(root: &Value) -> Result<(), GltfError> {
     }
 }
 
+/// Every accessor reference of every primitive must exist. Checked before `gltf-json`'s
+/// validation because that indexes `accessors[POSITION]` unchecked and panics otherwise.
+fn check_primitive_references(root: &Value) -> Result<(), GltfError> {
+    let accessors = array(root, "accessors").len() as u64;
+    let check = |value: &Value, path: String| -> Result<(), GltfError> {
+        match value.as_u64() {
+            Some(i) if i < accessors => Ok(()),
+            _ => Err(GltfError::new(
+                ErrorCode::Schema,
+                path,
+                format!("{value} is not an accessor index (there are {accessors})"),
+                "point the attribute at an existing accessor",
+            )),
+        }
+    };
+    for (m, mesh) in array(root, "meshes").iter().enumerate() {
+        for (p, prim) in array(mesh, "primitives").iter().enumerate() {
+            let path = format!("/meshes/{m}/primitives/{p}");
+            if let Some(attributes) = prim.get("attributes").and_then(Value::as_object) {
+                for (name, value) in attributes {
+                    check(value, format!("{path}/attributes/{name}"))?;
+                }
+            }
+            if let Some(indices) = prim.get("indices") {
+                check(indices, format!("{path}/indices"))?;
+            }
+            for (t, target) in array(prim, "targets").iter().enumerate() {
+                for (name, value) in target.as_object().into_iter().flatten() {
+                    check(value, format!("{path}/targets/{t}/{name}"))?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Schema validation by `gltf-json` (typed parse + its `Validate`), reported with JSON pointers.
 /// Cost: a second parse of the JSON text into typed structs.
 fn check_schema(json: &[u8]) -> Result<(), GltfError> {
     let typed: gltf_json::Root = serde_json::from_slice(json).map_err(|e| {
+        let offset = offset_of_line_column(json, e.line(), e.column());
         GltfError::new(
             ErrorCode::Schema,
-            "",
+            pointer_at_offset(json, offset),
             format!("the document does not follow the glTF 2.0 schema: {e}"),
             "fix the property named in the message",
         )
@@ -411,10 +508,15 @@ fn check_schema(json: &[u8]) -> Result<(), GltfError> {
         // EXT_texture_webp, ...) has no `source`, which is legal too.
         let extension_list =
             path.starts_with("extensionsRequired[") || path.starts_with("extensionsUsed[");
-        let extension_texture = path.starts_with("textures[")
-            && path.ends_with(".source")
-            && error == gltf_json::validation::Error::Missing;
-        if extension_list || extension_texture {
+        let missing = error == gltf_json::validation::Error::Missing;
+        let extension_texture =
+            missing && path.starts_with("textures[") && path.ends_with(".source");
+        // An accessor without buffer view is all zeros (spec §3.6.2.1), which is legal.
+        let zero_accessor =
+            missing && path.starts_with("accessors[") && path.ends_with(".bufferView");
+        // POSITION is optional for the spec; `extract_triangles` names it where we need it.
+        let no_position = missing && path.ends_with("attributes[\"POSITION\"]");
+        if extension_list || extension_texture || zero_accessor || no_position {
             return;
         }
         total += 1;
@@ -757,13 +859,20 @@ fn extract_triangles(
                     }
                     let packed = reader.read_packed(position)?;
                     let size = position.component_type.size();
+                    let float = position.component_type == ComponentType::F32;
                     input.positions_m.reserve(vertex_count as usize);
                     for (i, element) in packed.chunks_exact(position.element_size).enumerate() {
                         let mut p = [0.0f64; 3];
                         for (c, value) in p.iter_mut().enumerate() {
-                            *value = position
-                                .component_type
-                                .value(&element[c * size..], position.normalized);
+                            let bytes = &element[c * size..];
+                            *value = if float {
+                                // Fast path for the common case (no normalization to apply).
+                                f64::from(f32::from_le_bytes([
+                                    bytes[0], bytes[1], bytes[2], bytes[3],
+                                ]))
+                            } else {
+                                position.component_type.value(bytes, position.normalized)
+                            };
                         }
                         if !p.iter().all(|x| x.is_finite()) {
                             return Err(GltfError::new(
@@ -785,9 +894,9 @@ fn extract_triangles(
                 }
             };
 
-            // Corner stream: the indices, or 0..count without them.
+            // Corner stream: the indices (checked < vertex count), or 0..count without them.
             let indices_path = format!("{path}/indices");
-            let (corner_count, packed_indices) = match field_u64(prim, "indices", &path)? {
+            let stream: Option<Vec<u32>> = match field_u64(prim, "indices", &path)? {
                 Some(index) => {
                     let layout = reader.layout(index, &indices_path)?;
                     if layout.kind != "SCALAR"
@@ -804,23 +913,45 @@ fn extract_triangles(
                             "re-export the indices",
                         ));
                     }
-                    (
-                        layout.count,
-                        Some((
-                            reader.read_packed(layout)?,
-                            layout.component_type,
-                            layout.index,
-                        )),
-                    )
+                    let packed = reader.read_packed(layout)?;
+                    let values: Vec<u32> = match layout.component_type {
+                        ComponentType::U8 => packed.iter().map(|&b| u32::from(b)).collect(),
+                        ComponentType::U16 => packed
+                            .chunks_exact(2)
+                            .map(|c| u32::from(u16::from_le_bytes([c[0], c[1]])))
+                            .collect(),
+                        _ => packed
+                            .chunks_exact(4)
+                            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                            .collect(),
+                    };
+                    drop(packed);
+                    if let Some((k, v)) = values
+                        .iter()
+                        .enumerate()
+                        .find(|(_, &v)| u64::from(v) >= vertex_count)
+                    {
+                        return Err(GltfError::new(
+                            ErrorCode::IndexOutOfRange,
+                            indices_path,
+                            format!(
+                                "index #{k} of accessor {} is {v}, but there are {vertex_count} vertices",
+                                layout.index
+                            ),
+                            "re-export the mesh; indices must be smaller than the vertex count",
+                        ));
+                    }
+                    Some(values)
                 }
-                None => (vertex_count, None),
+                None => None,
             };
+            let corner_count = stream.as_ref().map_or(vertex_count, |s| s.len() as u64);
             let triangle_count = match mode {
                 PrimitiveMode::Triangles => {
                     if corner_count % 3 != 0 {
                         return Err(primitive_error(
                             ErrorCode::PrimitiveInvalid,
-                            if packed_indices.is_some() { indices_path } else { format!("{path}/attributes/POSITION") },
+                            if stream.is_some() { indices_path } else { format!("{path}/attributes/POSITION") },
                             format!("a TRIANGLES primitive needs a multiple of 3 corners, found {corner_count}"),
                         ));
                     }
@@ -841,37 +972,25 @@ fn extract_triangles(
                     limits.max_triangles.unwrap_or(0),
                 ));
             }
-            let corner = |k: u64| -> Result<u32, GltfError> {
-                let local = match &packed_indices {
-                    None => k,
-                    Some((bytes, ct, accessor)) => {
-                        let size = ct.size();
-                        let at = k as usize * size;
-                        let v = ct.raw(bytes.get(at..at + size).unwrap_or(&[])) as u64;
-                        if v >= vertex_count {
-                            return Err(GltfError::new(
-                                ErrorCode::IndexOutOfRange,
-                                format!("{path}/indices"),
-                                format!("index #{k} of accessor {accessor} is {v}, but there are {vertex_count} vertices"),
-                                "re-export the mesh; indices must be smaller than the vertex count",
-                            ));
-                        }
-                        v
-                    }
+            // `k < corner_count` for every call below, so `get` never misses.
+            let corner = |k: u64| -> u32 {
+                let local = match &stream {
+                    None => k as u32,
+                    Some(s) => s.get(k as usize).copied().unwrap_or(0),
                 };
-                Ok(vertex_start + local as u32)
+                vertex_start + local
             };
             input.triangles.reserve(triangle_count as usize);
             for i in 0..triangle_count {
                 let t = match mode {
                     PrimitiveMode::Triangles => {
-                        [corner(3 * i)?, corner(3 * i + 1)?, corner(3 * i + 2)?]
+                        [corner(3 * i), corner(3 * i + 1), corner(3 * i + 2)]
                     }
                     PrimitiveMode::TriangleStrip => {
                         let odd = i % 2;
-                        [corner(i)?, corner(i + 1 + odd)?, corner(i + 2 - odd)?]
+                        [corner(i), corner(i + 1 + odd), corner(i + 2 - odd)]
                     }
-                    PrimitiveMode::TriangleFan => [corner(i + 1)?, corner(i + 2)?, corner(0)?],
+                    PrimitiveMode::TriangleFan => [corner(i + 1), corner(i + 2), corner(0)],
                 };
                 input.triangles.push(t);
             }
@@ -883,7 +1002,7 @@ fn extract_triangles(
                 vertex_start,
                 vertex_count: vertex_count_u32,
                 texcoord_sets,
-                indexed: packed_indices.is_some(),
+                indexed: stream.is_some(),
             });
         }
     }

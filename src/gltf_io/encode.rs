@@ -16,17 +16,20 @@
 //!   `indices`, `targets`, `mode`; appended accessors and buffer views; `bufferViews[*].buffer`
 //!   / `byteOffset` (rebased into one buffer); `buffers` (one buffer); external images (now a
 //!   `bufferView` + `mimeType`). Existing accessors keep their indices and data, so skins,
-//!   animations and unknown extensions that reference them stay valid. The rewritten primitives'
-//!   old accessors stay in the file unused (size is traded for certainty that nothing else
-//!   referenced them).
+//!   animations and unknown extensions that reference them stay valid. The one exception is
+//!   [`OldVertexData::DropWhenSafe`]: accessors that only the rewritten primitives used become
+//!   one-element zero accessors and their bytes leave the buffer, but only when no other
+//!   primitive, skin or animation references them and every extension in the document is known
+//!   not to reference accessors or buffer views.
 //! - Vertex-attribute elements are 4-byte aligned (a padded `byteStride` when an element is not
 //!   a multiple of 4 bytes), as the spec requires; `min`/`max` are recomputed for POSITION
 //!   (attribute and morph target) and wherever the source accessor had them.
 //!
-//! Units: UVs as given (normally [0,1]), written as float VEC2.
+//! Units: UVs as given (normally \[0,1\]), written as float VEC2.
 //!
 //! References: glTF 2.0 spec §3.6.2.4 (data alignment), §3.6.2.5 (accessor bounds: min/max are
 //! raw values, `normalized` has no effect), §3.7.2.1 (primitive modes), §4.4 (GLB).
+use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 
 use base64::Engine as _;
@@ -60,6 +63,21 @@ pub enum OutputFormat {
     Gltf,
 }
 
+/// What happens to the accessors the rewritten primitives used before.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum OldVertexData {
+    /// Drop their bytes when that is provably safe, else keep them. The default. Safe means:
+    /// nothing outside the rewritten primitives references the accessor (other primitives,
+    /// skins, animation samplers), and the document uses no extension outside a list known not
+    /// to reference accessors or buffer views (an unknown extension might). A dropped accessor
+    /// keeps its index but becomes `{componentType, count: 1, type}` with no buffer view
+    /// (all zeros, unused), and buffer views nothing references any more lose their bytes.
+    #[default]
+    DropWhenSafe,
+    /// Keep every accessor and every byte as it was (output about the input plus the new data).
+    Keep,
+}
+
 /// Options of [`encode`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct EncodeOptions {
@@ -67,6 +85,8 @@ pub struct EncodeOptions {
     pub uv_target: UvTarget,
     /// Output container. Default: [`OutputFormat::Glb`].
     pub format: OutputFormat,
+    /// Old vertex data of rewritten primitives. Default: [`OldVertexData::DropWhenSafe`].
+    pub old_vertex_data: OldVertexData,
 }
 
 /// The encoded asset.
@@ -132,22 +152,70 @@ pub fn encode(
     let mut json = asset.json.clone();
     let mut out = Output::default();
 
-    // 1. One buffer: the original buffers back to back, buffer views rebased.
-    let mut bases = Vec::with_capacity(asset.buffers.len());
-    for buffer in &asset.buffers {
-        out.align();
-        bases.push(out.bin.len() as u64);
-        out.bin.extend_from_slice(buffer);
-    }
-    if let Some(views) = json.get_mut("bufferViews").and_then(Value::as_array_mut) {
-        for view in views {
+    // 1. One buffer, buffer views rebased: either the original buffers back to back, or (when
+    //    old vertex data is dropped) only the views something still references.
+    let dropped = match options.old_vertex_data {
+        OldVertexData::Keep => Vec::new(),
+        OldVertexData::DropWhenSafe => droppable_accessors(asset),
+    };
+    let mut dead_views = Vec::new();
+    if dropped.is_empty() {
+        let mut bases = Vec::with_capacity(asset.buffers.len());
+        for buffer in &asset.buffers {
+            out.align();
+            bases.push(out.bin.len() as u64);
+            out.bin.extend_from_slice(buffer);
+        }
+        if let Some(views) = json.get_mut("bufferViews").and_then(Value::as_array_mut) {
+            for view in views {
+                let buffer = view.get("buffer").and_then(Value::as_u64).unwrap_or(0) as usize;
+                let offset = view.get("byteOffset").and_then(Value::as_u64).unwrap_or(0);
+                let base = bases.get(buffer).copied().unwrap_or(0);
+                if let Some(view) = view.as_object_mut() {
+                    view.insert("buffer".into(), json!(0));
+                    if base + offset != 0 || view.contains_key("byteOffset") {
+                        view.insert("byteOffset".into(), json!(base + offset));
+                    }
+                }
+            }
+        }
+    } else {
+        let live = live_views(&asset.json, &dropped);
+        let views = json.get_mut("bufferViews").and_then(Value::as_array_mut);
+        for (i, view) in views.into_iter().flatten().enumerate() {
+            let Some(view) = view.as_object_mut() else {
+                continue;
+            };
+            if !live.get(i).copied().unwrap_or(true) {
+                dead_views.push(i);
+                continue;
+            }
             let buffer = view.get("buffer").and_then(Value::as_u64).unwrap_or(0) as usize;
-            let offset = view.get("byteOffset").and_then(Value::as_u64).unwrap_or(0);
-            let base = bases.get(buffer).copied().unwrap_or(0);
-            if let Some(view) = view.as_object_mut() {
-                view.insert("buffer".into(), json!(0));
-                if base + offset != 0 || view.contains_key("byteOffset") {
-                    view.insert("byteOffset".into(), json!(base + offset));
+            let offset = view.get("byteOffset").and_then(Value::as_u64).unwrap_or(0) as usize;
+            let length = view.get("byteLength").and_then(Value::as_u64).unwrap_or(0) as usize;
+            let bytes = asset
+                .buffers
+                .get(buffer)
+                .and_then(|b| b.get(offset..offset + length))
+                .unwrap_or(&[]);
+            // Keep the offset's residue mod 4 so every accessor keeps its alignment.
+            out.align();
+            out.bin.resize(out.bin.len() + offset % 4, 0);
+            view.insert("buffer".into(), json!(0));
+            view.insert("byteOffset".into(), json!(out.bin.len()));
+            out.bin.extend_from_slice(bytes);
+        }
+        if let Some(accessors) = json.get_mut("accessors").and_then(Value::as_array_mut) {
+            for &i in &dropped {
+                if let Some(a) = accessors.get_mut(i) {
+                    let mut zero = Map::new();
+                    for key in ["componentType", "type", "name"] {
+                        if let Some(v) = a.get(key) {
+                            zero.insert(key.into(), v.clone());
+                        }
+                    }
+                    zero.insert("count".into(), json!(1));
+                    *a = Value::Object(zero);
                 }
             }
         }
@@ -181,6 +249,11 @@ pub fn encode(
     let reader = Reader::new(&asset.json, &asset.buffers, &asset.limits)?;
     let mut packed_cache: HashMap<usize, Vec<u8>> = HashMap::new();
     for (prim, &uv_set) in asset.primitives.iter().zip(&targets) {
+        // A primitive without triangles (a strip of two vertices) has nothing to carry UVs and
+        // would need zero-element accessors, which glTF forbids: it stays as it was.
+        if prim.faces.is_empty() {
+            continue;
+        }
         let path = format!(
             "/meshes/{}/primitives/{}",
             prim.mesh_index, prim.primitive_index
@@ -192,14 +265,11 @@ pub fn encode(
         let mut gather =
             |name: &str, index: u64, ref_path: &str, out: &mut Output| -> Result<u64, GltfError> {
                 let layout = reader.layout(index, ref_path)?;
-                if !packed_cache.contains_key(&layout.index) {
-                    let packed = reader.read_packed(layout)?;
-                    packed_cache.insert(layout.index, packed);
-                }
-                let packed = packed_cache
-                    .get(&layout.index)
-                    .map(Vec::as_slice)
-                    .unwrap_or(&[]);
+                // Accessors shared by several primitives are read once.
+                let packed: &[u8] = match packed_cache.entry(layout.index) {
+                    Entry::Occupied(e) => e.into_mut(),
+                    Entry::Vacant(e) => e.insert(reader.read_packed(layout)?),
+                };
                 let source_json = asset.json.pointer(&format!("/accessors/{}", layout.index));
                 let with_bounds =
                     name == "POSITION" || source_json.is_some_and(|a| a.get("min").is_some());
@@ -259,7 +329,31 @@ pub fn encode(
     }
     drop(reader);
 
-    // 4. Append the new views and accessors, write the one buffer.
+    // 4. Append the new views and accessors, write the one buffer. Views nothing references
+    //    any more point at the start of the buffer (their bytes are gone; they stay only so
+    //    that no view is renumbered).
+    out.align();
+    if let Some(views) = json.get_mut("bufferViews").and_then(Value::as_array_mut) {
+        let available = out.bin.len().max(4);
+        for &i in &dead_views {
+            if let Some(view) = views.get_mut(i).and_then(Value::as_object_mut) {
+                let length = view.get("byteLength").and_then(Value::as_u64).unwrap_or(4) as usize;
+                let length = length.clamp(1, available);
+                view.insert("byteOffset".into(), json!(0));
+                view.insert("byteLength".into(), json!(length));
+                if view
+                    .get("byteStride")
+                    .and_then(Value::as_u64)
+                    .is_some_and(|s| s as usize > length)
+                {
+                    view.remove("byteStride");
+                }
+            }
+        }
+        if out.bin.len() < available && !dead_views.is_empty() {
+            out.bin.resize(available, 0);
+        }
+    }
     append(&mut json, "bufferViews", std::mem::take(&mut out.views));
     append(&mut json, "accessors", std::mem::take(&mut out.accessors));
     out.align();
@@ -308,6 +402,132 @@ pub fn encode(
         bytes,
         uv_set_per_primitive: targets,
     })
+}
+
+/// Extensions known to reference no accessor and no buffer view; any other extension object
+/// in the document (an unknown one might reference them by index) disables dropping.
+const ACCESSOR_FREE_EXTENSIONS: [&str; 10] = [
+    "KHR_materials_",
+    "KHR_texture_transform",
+    "KHR_lights_punctual",
+    "KHR_mesh_quantization",
+    "KHR_texture_basisu",
+    "EXT_texture_webp",
+    "EXT_texture_avif",
+    "KHR_xmp_json_ld",
+    "KHR_animation_pointer",
+    "KHR_materials_variants",
+];
+
+fn extension_is_accessor_free(name: &str) -> bool {
+    // Entries ending in `_` are prefixes (the KHR_materials_* family).
+    ACCESSOR_FREE_EXTENSIONS.iter().any(|known| {
+        if known.ends_with('_') {
+            name.starts_with(known)
+        } else {
+            name == *known
+        }
+    })
+}
+
+/// True if every `extensions` object anywhere in the tree only names accessor-free extensions.
+fn only_accessor_free_extensions(value: &Value) -> bool {
+    match value {
+        Value::Object(map) => map.iter().all(|(key, v)| {
+            let names_ok = key != "extensions"
+                || v.as_object()
+                    .is_some_and(|exts| exts.keys().all(|n| extension_is_accessor_free(n)));
+            names_ok && only_accessor_free_extensions(v)
+        }),
+        Value::Array(items) => items.iter().all(only_accessor_free_extensions),
+        _ => true,
+    }
+}
+
+/// Accessors that only the rewritten (triangle) primitives reference, when dropping is safe;
+/// empty otherwise. Sorted ascending.
+fn droppable_accessors(asset: &Asset) -> Vec<usize> {
+    let root = &asset.json;
+    if !only_accessor_free_extensions(root) {
+        return Vec::new();
+    }
+    let n = array(root, "accessors").len();
+    let mut used_by_rewritten = vec![false; n];
+    let mut used_elsewhere = vec![false; n];
+    let mark = |flags: &mut Vec<bool>, v: Option<&Value>| {
+        if let Some(i) = v.and_then(Value::as_u64) {
+            if let Some(f) = flags.get_mut(i as usize) {
+                *f = true;
+            }
+        }
+    };
+    let rewritten: Vec<(usize, usize)> = asset
+        .primitives
+        .iter()
+        .filter(|p| !p.faces.is_empty())
+        .map(|p| (p.mesh_index, p.primitive_index))
+        .collect();
+    for (m, mesh) in array(root, "meshes").iter().enumerate() {
+        for (p, prim) in array(mesh, "primitives").iter().enumerate() {
+            let flags = if rewritten.contains(&(m, p)) {
+                &mut used_by_rewritten
+            } else {
+                &mut used_elsewhere
+            };
+            for v in prim
+                .get("attributes")
+                .and_then(Value::as_object)
+                .into_iter()
+                .flat_map(|m| m.values())
+            {
+                mark(flags, Some(v));
+            }
+            mark(flags, prim.get("indices"));
+            for target in array(prim, "targets") {
+                for v in target.as_object().into_iter().flat_map(|m| m.values()) {
+                    mark(flags, Some(v));
+                }
+            }
+        }
+    }
+    for skin in array(root, "skins") {
+        mark(&mut used_elsewhere, skin.get("inverseBindMatrices"));
+    }
+    for animation in array(root, "animations") {
+        for sampler in array(animation, "samplers") {
+            mark(&mut used_elsewhere, sampler.get("input"));
+            mark(&mut used_elsewhere, sampler.get("output"));
+        }
+    }
+    (0..n)
+        .filter(|&i| used_by_rewritten[i] && !used_elsewhere[i])
+        .collect()
+}
+
+/// Which original buffer views are still referenced once `dropped` accessors are gone.
+fn live_views(root: &Value, dropped: &[usize]) -> Vec<bool> {
+    let mut live = vec![false; array(root, "bufferViews").len()];
+    let mut mark = |v: Option<&Value>| {
+        if let Some(i) = v.and_then(Value::as_u64) {
+            if let Some(f) = live.get_mut(i as usize) {
+                *f = true;
+            }
+        }
+    };
+    for (i, a) in array(root, "accessors").iter().enumerate() {
+        if dropped.binary_search(&i).is_ok() {
+            continue;
+        }
+        mark(a.get("bufferView"));
+        if let Some(sparse) = a.get("sparse") {
+            mark(sparse.get("indices").and_then(|x| x.get("bufferView")));
+            mark(sparse.get("values").and_then(|x| x.get("bufferView")));
+        }
+    }
+    for image in array(root, "images") {
+        mark(image.get("bufferView"));
+    }
+    live
 }
 
 fn uv_set_for(prim: &TrianglePrimitive, target: UvTarget) -> Result<u32, GltfError> {

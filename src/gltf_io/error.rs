@@ -180,6 +180,93 @@ pub(crate) fn pointer_from_gltf_path(path: &str) -> String {
     out
 }
 
+/// The JSON pointer of the innermost value open at byte `offset` of `json`: used to name the
+/// place of a serde error, which only knows its line and column. A small scanner over the text
+/// (strings and escapes, objects with their current key, arrays with their current index); for
+/// an error reported just after a value it names that value, for an error at a closing brace
+/// (e.g. "missing field") it names the object.
+pub(crate) fn pointer_at_offset(json: &[u8], offset: usize) -> String {
+    enum Frame {
+        Object {
+            key: Option<String>,
+            expecting_key: bool,
+        },
+        Array {
+            index: usize,
+        },
+    }
+    let mut stack: Vec<Frame> = Vec::new();
+    let mut i = 0;
+    let end = offset.min(json.len());
+    while i < end {
+        match json[i] {
+            b'"' => {
+                let start = i + 1;
+                i += 1;
+                while i < json.len() && json[i] != b'"' {
+                    i += if json[i] == b'\\' { 2 } else { 1 };
+                }
+                let text =
+                    String::from_utf8_lossy(json.get(start..i.min(json.len())).unwrap_or(&[]));
+                if let Some(Frame::Object { key, expecting_key }) = stack.last_mut() {
+                    if *expecting_key {
+                        *key = Some(text.into_owned());
+                        *expecting_key = false;
+                    }
+                }
+            }
+            b'{' => stack.push(Frame::Object {
+                key: None,
+                expecting_key: true,
+            }),
+            b'[' => stack.push(Frame::Array { index: 0 }),
+            b'}' | b']' => {
+                stack.pop();
+            }
+            b',' => match stack.last_mut() {
+                Some(Frame::Array { index }) => *index += 1,
+                Some(Frame::Object { key, expecting_key }) => {
+                    *key = None;
+                    *expecting_key = true;
+                }
+                None => {}
+            },
+            _ => {}
+        }
+        i += 1;
+    }
+    let mut out = String::new();
+    for frame in &stack {
+        match frame {
+            Frame::Object { key: Some(key), .. } => {
+                out.push('/');
+                key.chars().for_each(|c| push_escaped(&mut out, c));
+            }
+            Frame::Object { key: None, .. } => break,
+            Frame::Array { index } => out.push_str(&format!("/{index}")),
+        }
+    }
+    out
+}
+
+/// Byte offset of a 1-based (line, column) position as serde_json reports it.
+pub(crate) fn offset_of_line_column(json: &[u8], line: usize, column: usize) -> usize {
+    let mut line_start = 0;
+    if line > 1 {
+        let mut seen = 1;
+        for (i, &b) in json.iter().enumerate() {
+            if b == b'\n' {
+                seen += 1;
+                if seen == line {
+                    line_start = i + 1;
+                    break;
+                }
+            }
+        }
+    }
+    (line_start + column).min(json.len())
+}
+
 fn push_escaped(out: &mut String, c: char) {
     match c {
         '~' => out.push_str("~0"),
@@ -208,6 +295,25 @@ mod tests {
         );
         assert_eq!(pointer_from_gltf_path("x[\"a/b~c\"]"), "/x/a~1b~0c");
         assert_eq!(pointer_from_gltf_path(""), "");
+    }
+
+    #[test]
+    fn offsets_map_to_the_open_value() {
+        let json = br#"{"accessors": [{"count": 3}, {"count": "x", "type": "VEC3"}], "asset": {}}"#;
+        let at = |needle: &str| {
+            let text = std::str::from_utf8(json).expect("utf8");
+            text.find(needle).expect("needle") + needle.len()
+        };
+        assert_eq!(pointer_at_offset(json, at("\"x\"")), "/accessors/1/count");
+        assert_eq!(
+            pointer_at_offset(json, at("{\"count\": 3}")),
+            "/accessors/0"
+        );
+        assert_eq!(pointer_at_offset(json, at("\"asset\": {")), "/asset");
+        assert_eq!(pointer_at_offset(json, json.len()), "");
+        let two_lines = b"{\n \"a\": 1}";
+        assert_eq!(offset_of_line_column(two_lines, 2, 7), 9);
+        assert_eq!(pointer_at_offset(two_lines, 9), "/a");
     }
 
     #[test]

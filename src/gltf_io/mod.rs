@@ -21,13 +21,15 @@
 //!   accessors; new accessors and buffer views are appended; buffers are merged into one (the
 //!   GLB BIN chunk, or one `data:` buffer for `.gltf`) and buffer views rebased; external images
 //!   are embedded through a buffer view. Existing accessors are never renumbered, so
-//!   animations, skins and unknown extensions that reference them stay valid; the old vertex
-//!   accessors of rewritten primitives are kept (correctness over size, see [`encode`]).
+//!   animations, skins and unknown extensions that reference them stay valid. The rewritten
+//!   primitives' old accessors lose their bytes only when that is provably safe (nothing else
+//!   references them and no extension that might is present, see [`OldVertexData`]); otherwise
+//!   they are kept as they were.
 //! - Meshes are unwrapped once, in mesh-local space: node transforms are not applied and a
 //!   mesh instanced by several nodes appears once.
 //!
 //! # Units
-//! Positions are in the asset's units (metres by glTF convention); UVs are in [0,1] texture
+//! Positions are in the asset's units (metres by glTF convention); UVs are in \[0,1\] texture
 //! space with glTF's convention (origin top-left, v down) — we write what we are given.
 //!
 //! # References
@@ -42,10 +44,10 @@ mod glb;
 mod uri;
 
 pub use decode::{
-    decode, Asset, AssetSummary, DecodeLimits, MeshSummary, PrimitiveMode, PrimitiveSummary,
-    SourceFormat, TrianglePrimitive,
+    decode, required_resources, Asset, AssetSummary, DecodeLimits, MeshSummary, PrimitiveMode,
+    PrimitiveSummary, SourceFormat, TrianglePrimitive,
 };
-pub use encode::{encode, EncodeOptions, EncodedAsset, OutputFormat, UvTarget};
+pub use encode::{encode, EncodeOptions, EncodedAsset, OldVertexData, OutputFormat, UvTarget};
 pub use error::{ErrorCode, GltfError};
 pub use external::{external_resources, ExternalReference};
 pub use uri::Resources;

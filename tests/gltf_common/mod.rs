@@ -321,3 +321,210 @@ impl Doc {
         out
     }
 }
+
+/// A generated asset with what the corpus lacks: interleaving, sparse (with and without a
+/// buffer view), quantized and normalized integers, a custom attribute, colours, joints and
+/// weights, morph targets, instancing, points/lines, a strip with indices, unknown extensions
+/// and extras at every level, a skin and an animation that reference accessors.
+pub fn kitchen_sink() -> Builder {
+    let mut b = Builder::new();
+    let ext = |tag: &str| json!({"EXT_unknown_thing": {"tag": tag, "nested": {"list": [1, 2.5, null, {"deep": true}]}}});
+    let extras = |tag: &str| json!({"note": tag, "ids": [7, 8]});
+
+    // Mesh 0: 3x3 grid, 8 triangles, u8 indices.
+    let mut interleaved = Vec::new();
+    let mut positions = Vec::new();
+    for j in 0..3 {
+        for i in 0..3 {
+            let p = [i as f32, j as f32, 0.1 * (i * j) as f32];
+            positions.push(p);
+            for x in p.iter().chain(&[0.0f32, 0.0, 1.0]) {
+                interleaved.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+    }
+    let iv = b.view(&interleaved, Some(24));
+    let min = [0.0f32, 0.0, 0.0];
+    let max = [2.0f32, 2.0, 0.4];
+    let pos = b.push("accessors", json!({"bufferView": iv, "componentType": 5126, "count": 9, "type": "VEC3", "min": min, "max": max, "extras": extras("pos"), "extensions": ext("accessor")}));
+    let nrm = b.push("accessors", json!({"bufferView": iv, "byteOffset": 12, "componentType": 5126, "count": 9, "type": "VEC3"}));
+    let uv0: Vec<u8> = (0..9u16)
+        .flat_map(|v| [v * 7000, 65535 - v * 3000])
+        .flat_map(u16::to_le_bytes)
+        .collect();
+    let uvv = b.view(&uv0, None);
+    let tex0 = b.push("accessors", json!({"bufferView": uvv, "componentType": 5123, "normalized": true, "count": 9, "type": "VEC2"}));
+    let colors: Vec<u8> = (0..9u8).flat_map(|v| [v * 20, 255 - v, v, 255]).collect();
+    let cv = b.view(&colors, None);
+    let sparse_idx = b.view(&[2u8, 7], None);
+    let sparse_val = b.view(&[1u8, 2, 3, 4, 5, 6, 7, 8], None);
+    let color0 = b.push("accessors", json!({"bufferView": cv, "componentType": 5121, "normalized": true, "count": 9, "type": "VEC4",
+        "sparse": {"count": 2, "indices": {"bufferView": sparse_idx, "componentType": 5121}, "values": {"bufferView": sparse_val}}}));
+    let sparse_idx1 = b.view(
+        &[1u16.to_le_bytes(), 4u16.to_le_bytes(), 8u16.to_le_bytes()].concat(),
+        None,
+    );
+    let sparse_val1 = b.view(&[200u8, 100, 50, 1, 2, 3, 9, 9, 9], None);
+    let color1 = b.push("accessors", json!({"componentType": 5121, "normalized": true, "count": 9, "type": "VEC3",
+        "sparse": {"count": 3, "indices": {"bufferView": sparse_idx1, "componentType": 5123}, "values": {"bufferView": sparse_val1}}}));
+    // 2-byte elements at a 4-byte stride, as vertex attributes must be.
+    let custom_bytes: Vec<u8> = (0..9u16)
+        .flat_map(|v| (1000 + v).to_le_bytes().into_iter().chain([0, 0]))
+        .collect();
+    let fv = b.view(&custom_bytes, Some(4));
+    let custom = b.push(
+        "accessors",
+        json!({"bufferView": fv, "componentType": 5123, "count": 9, "type": "SCALAR"}),
+    );
+    let joints: Vec<u8> = (0..9u8).flat_map(|_| [0, 1, 0, 0]).collect();
+    let jv = b.view(&joints, None);
+    let joints = b.push(
+        "accessors",
+        json!({"bufferView": jv, "componentType": 5121, "count": 9, "type": "VEC4"}),
+    );
+    let weights: Vec<[f32; 4]> = (0..9)
+        .map(|v| [0.5 + v as f32 * 0.05, 0.5 - v as f32 * 0.05, 0.0, 0.0])
+        .collect();
+    let weights = b.floats(&weights);
+    let t0_idx = b.view(&[0u8, 4, 8, 0], None);
+    let t0_val_data: Vec<u8> = [[0.0f32, 0.0, 1.0], [0.0, 0.5, 0.5], [1.0, 0.0, 0.0]]
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let t0_val = b.view(&t0_val_data, None);
+    let target0_pos = b.push("accessors", json!({"componentType": 5126, "count": 9, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 0.5, 1.0],
+        "sparse": {"count": 3, "indices": {"bufferView": t0_idx, "componentType": 5121}, "values": {"bufferView": t0_val}}}));
+    let target0_nrm = b.floats(
+        &(0..9)
+            .map(|v| [0.0f32, 0.01 * v as f32, 0.0])
+            .collect::<Vec<_>>(),
+    );
+    let target1_pos = b.floats(
+        &(0..9)
+            .map(|v| [0.1 * v as f32, 0.0, 0.0])
+            .collect::<Vec<_>>(),
+    );
+    let idx: Vec<u8> = vec![
+        0, 1, 4, 0, 4, 3, 1, 2, 5, 1, 5, 4, 3, 4, 7, 3, 7, 6, 4, 5, 8, 4, 8, 7,
+    ];
+    let iv8 = b.view(&idx, None);
+    let indices = b.push(
+        "accessors",
+        json!({"bufferView": iv8, "componentType": 5121, "count": 24, "type": "SCALAR"}),
+    );
+    b.push("meshes", json!({
+        "name": "sink",
+        "weights": [0.5, 0.25],
+        "primitives": [{
+            "attributes": {"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": tex0, "COLOR_0": color0, "COLOR_1": color1,
+                           "_FOO": custom, "JOINTS_0": joints, "WEIGHTS_0": weights},
+            "indices": indices,
+            "material": 0,
+            "targets": [{"POSITION": target0_pos, "NORMAL": target0_nrm}, {"POSITION": target1_pos}],
+            "extensions": ext("primitive"),
+            "extras": extras("primitive")
+        }],
+        "extensions": ext("mesh"),
+        "extras": extras("mesh")
+    }));
+
+    // Mesh 1: quantized positions (i16 normalized, 6-byte elements at stride 8), a fan.
+    let q: Vec<[i16; 3]> = vec![
+        [0, 0, 0],
+        [32767, 0, 0],
+        [20000, 20000, 0],
+        [0, 32767, 0],
+        [-32767, 100, 5],
+    ];
+    let qbytes: Vec<u8> = q
+        .iter()
+        .flat_map(|p| p.iter().flat_map(|c| c.to_le_bytes()).chain([0, 0]))
+        .collect();
+    let qv = b.view(&qbytes, Some(8));
+    let qpos = b.push("accessors", json!({"bufferView": qv, "componentType": 5122, "normalized": true, "count": 5, "type": "VEC3",
+        "min": [-32767, 0, 0], "max": [32767, 32767, 5]}));
+    b.push(
+        "meshes",
+        json!({"name": "quantized", "primitives": [{"attributes": {"POSITION": qpos}, "mode": 6}]}),
+    );
+
+    // Mesh 2: points, lines, and a strip with u32 indices.
+    let ppos = b.floats(&[
+        [0.0f32, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 1.0, 0.5],
+    ]);
+    let line_idx = b.indices(&[0, 1, 1, 3]);
+    let strip_bytes: Vec<u8> = [0u32, 1, 2, 3]
+        .iter()
+        .flat_map(|i| i.to_le_bytes())
+        .collect();
+    let sv = b.view(&strip_bytes, None);
+    let strip_idx = b.push(
+        "accessors",
+        json!({"bufferView": sv, "componentType": 5125, "count": 4, "type": "SCALAR"}),
+    );
+    b.push("meshes", json!({"name": "mixed", "primitives": [
+        {"attributes": {"POSITION": ppos}, "mode": 0},
+        {"attributes": {"POSITION": ppos}, "indices": line_idx, "mode": 1, "extras": extras("lines")},
+        {"attributes": {"POSITION": ppos}, "indices": strip_idx, "mode": 5}
+    ]}));
+
+    // Skin and animation referencing accessors that encode must not renumber.
+    let ibm: Vec<[f32; 4]> = vec![
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+        [0.0, 0.0, 0.0, 1.0],
+    ];
+    let ibm_bytes: Vec<u8> = ibm
+        .iter()
+        .chain(&ibm)
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let ibmv = b.view(&ibm_bytes, None);
+    let ibm = b.push(
+        "accessors",
+        json!({"bufferView": ibmv, "componentType": 5126, "count": 2, "type": "MAT4"}),
+    );
+    let times = b.floats(&[[0.0f32], [1.0]]);
+    let values = b.floats(&[[0.0f32, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    b.push("materials", json!({"name": "m", "pbrMetallicRoughness": {"baseColorFactor": [1, 0.5, 0.25, 1]},
+        "extensions": {"KHR_materials_sheen": {"sheenRoughnessFactor": 0.5}, "EXT_unknown_thing": {"a": 1}}, "extras": extras("material")}));
+    b.push("nodes", json!({"name": "sink-a", "mesh": 0, "skin": 0, "extensions": ext("node"), "extras": extras("node")}));
+    b.push("nodes", json!({"name": "sink-b", "mesh": 0, "skin": 0}));
+    b.push(
+        "nodes",
+        json!({"name": "quantized", "mesh": 1, "scale": [0.001, 0.001, 0.001]}),
+    );
+    b.push("nodes", json!({"name": "mixed", "mesh": 2, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 5, 0, 0, 1]}));
+    b.push("nodes", json!({"name": "joint0", "children": [5]}));
+    b.push("nodes", json!({"name": "joint1"}));
+    b.push("nodes", json!({"name": "root", "children": [2, 3, 4]}));
+    b.push(
+        "skins",
+        json!({"joints": [4, 5], "inverseBindMatrices": ibm, "extras": extras("skin")}),
+    );
+    b.push(
+        "animations",
+        json!({"channels": [{"sampler": 0, "target": {"node": 4, "path": "translation"}}],
+        "samplers": [{"input": times, "output": values}]}),
+    );
+    b.push(
+        "scenes",
+        json!({"nodes": [0, 1, 6], "extensions": ext("scene")}),
+    );
+    b.json["scene"] = json!(0);
+    b.json["extensionsUsed"] = json!([
+        "EXT_unknown_thing",
+        "KHR_mesh_quantization",
+        "KHR_materials_sheen"
+    ]);
+    b.json["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+    b.json["extensions"] = ext("root");
+    b.json["extras"] = extras("root");
+    b
+}
