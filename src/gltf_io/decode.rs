@@ -398,7 +398,7 @@ fn decode_unguarded(
     })
 }
 
-pub(crate) fn parse_json(json: &[u8]) -> Result<Value, GltfError> {
+fn parse_json(json: &[u8]) -> Result<Value, GltfError> {
     let value: Value = serde_json::from_slice(json).map_err(|e| {
         let message = e.to_string();
         if message.contains("recursion limit") {

@@ -39,7 +39,6 @@ mod accessor;
 mod decode;
 mod encode;
 mod error;
-mod external;
 mod glb;
 mod uri;
 
@@ -49,8 +48,7 @@ pub use decode::{
 };
 pub use encode::{encode, EncodeOptions, EncodedAsset, OldVertexData, OutputFormat, UvTarget};
 pub use error::{ErrorCode, GltfError};
-pub use external::{external_resources, ExternalReference};
-pub use uri::Resources;
+pub use uri::{relative_path_of, Resources};
 
 #[doc(no_inline)]
 pub use crate::mesh::MeshInput;

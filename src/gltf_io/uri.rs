@@ -54,7 +54,14 @@ impl Resources {
     }
 }
 
-pub(crate) fn percent_decode(s: &str) -> Option<String> {
+/// The file path a relative URI names: the URI percent-decoded (`"my%20file.bin"` →
+/// `"my file.bin"`), or the URI itself when it has no valid escapes. For callers that read
+/// [`required_resources`](super::required_resources) from a directory.
+pub fn relative_path_of(uri: &str) -> String {
+    percent_decode(uri).unwrap_or_else(|| uri.to_string())
+}
+
+fn percent_decode(s: &str) -> Option<String> {
     if !s.contains('%') {
         return None;
     }
@@ -204,6 +211,13 @@ mod tests {
             let e = resolve(uri, "/buffers/0/uri", &res).expect_err(uri);
             assert_eq!(e.code, ErrorCode::UriForbidden, "{uri}");
         }
+    }
+
+    #[test]
+    fn relative_path_of_percent_decodes() {
+        assert_eq!(relative_path_of("tex/my%20wood.png"), "tex/my wood.png");
+        assert_eq!(relative_path_of("plain.bin"), "plain.bin");
+        assert_eq!(relative_path_of("bad%zz.bin"), "bad%zz.bin");
     }
 
     #[test]
