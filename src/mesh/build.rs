@@ -18,6 +18,7 @@
 //!    corner), so on clean input with every position used, `VertexId(i)` is source vertex `i`.
 //!
 //! Units: positions in model units (`_m`), untouched (no transform, no rescaling).
+use rayon::iter::{IntoParallelIterator, ParallelIterator};
 use rayon::slice::ParallelSliceMut;
 
 use super::defect::{BadIndex, DegenerateKind, MeshBuildError, MeshDefect, Offenders};
@@ -138,25 +139,29 @@ impl TriangleMesh {
         let wv: Vec<u32> = corner_source.iter().map(|&s| welded[s as usize]).collect();
         drop(welded);
 
-        // 3. Degenerate faces.
-        let mut defects = Vec::new();
-        let mut face_degeneracy = vec![None; nf];
-        for f in 0..nf {
-            let [a, b, c] = [wv[3 * f], wv[3 * f + 1], wv[3 * f + 2]];
-            let kind = if a == b || b == c || a == c {
-                Some(DegenerateKind::RepeatedVertex)
-            } else {
-                let p = tris[f].map(|i| pos[i as usize]);
-                triangle_is_zero_area(&p).then_some(DegenerateKind::ZeroArea)
-            };
-            if let Some(kind) = kind {
-                face_degeneracy[f] = Some(kind);
-                defects.push(MeshDefect::DegenerateTriangle {
+        // 3. Degenerate faces (independent per face: parallel map, collected in face order).
+        let face_degeneracy: Vec<Option<DegenerateKind>> = (0..nf)
+            .into_par_iter()
+            .map(|f| {
+                let [a, b, c] = [wv[3 * f], wv[3 * f + 1], wv[3 * f + 2]];
+                if a == b || b == c || a == c {
+                    Some(DegenerateKind::RepeatedVertex)
+                } else {
+                    let p = tris[f].map(|i| pos[i as usize]);
+                    triangle_is_zero_area(&p).then_some(DegenerateKind::ZeroArea)
+                }
+            })
+            .collect();
+        let mut defects: Vec<MeshDefect> = face_degeneracy
+            .iter()
+            .enumerate()
+            .filter_map(|(f, kind)| {
+                kind.map(|kind| MeshDefect::DegenerateTriangle {
                     face: FaceId(f as u32),
                     kind,
-                });
-            }
-        }
+                })
+            })
+            .collect();
         let isolated = |f: usize| face_degeneracy[f] == Some(DegenerateKind::RepeatedVertex);
 
         // 4. Glue half-edges by undirected welded edge.
@@ -226,21 +231,33 @@ impl TriangleMesh {
                             }
                         }
                         _ => {
-                            // More than two faces: keep the lowest face glued to the lowest face
-                            // running the other way, cut everything else.
-                            let h0 = h_of(run[0]);
-                            let dir0 = wv[h0 as usize];
-                            let partner = run
+                            // More than two faces: pair them greedily in face order, the lowest
+                            // remaining face with the lowest remaining face running the other
+                            // way. With both directions in ascending lists that is simply the
+                            // i-th with the i-th (O(k), even for a hostile 1M-face edge). Faces
+                            // left without a partner are cut off.
+                            let (lo_first, hi_first): (Vec<u32>, Vec<u32>) = (
+                                run.iter()
+                                    .map(|&e| h_of(e))
+                                    .filter(|&h| wv[h as usize] == lo as u32)
+                                    .collect(),
+                                run.iter()
+                                    .map(|&e| h_of(e))
+                                    .filter(|&h| wv[h as usize] != lo as u32)
+                                    .collect(),
+                            );
+                            let glued = lo_first
                                 .iter()
-                                .map(|&e| h_of(e))
-                                .find(|&h| wv[h as usize] != dir0);
-                            let glued = partner.map(|h1| {
-                                opposite[h0 as usize] = h1;
-                                opposite[h1 as usize] = h0;
-                                union(&mut parent, h0, next(h1 as usize) as u32);
-                                union(&mut parent, h1, next(h0 as usize) as u32);
-                                [FaceId(h0 / 3), FaceId(h1 / 3)]
-                            });
+                                .zip(&hi_first)
+                                .map(|(&h0, &h1)| {
+                                    opposite[h0 as usize] = h1;
+                                    opposite[h1 as usize] = h0;
+                                    union(&mut parent, h0, next(h1 as usize) as u32);
+                                    union(&mut parent, h1, next(h0 as usize) as u32);
+                                    let (f0, f1) = (FaceId(h0 / 3), FaceId(h1 / 3));
+                                    [f0.min(f1), f0.max(f1)]
+                                })
+                                .collect();
                             edge_defects.push(MeshDefect::NonManifoldEdge {
                                 faces: run.iter().map(|&e| FaceId(h_of(e) / 3)).collect(),
                                 glued,

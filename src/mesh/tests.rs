@@ -423,7 +423,7 @@ fn fin_keeps_the_lowest_consistent_pair_and_cuts_the_rest() {
         b.defects[0],
         MeshDefect::NonManifoldEdge {
             faces: vec![FaceId(0), FaceId(1), FaceId(2)],
-            glued: Some([FaceId(0), FaceId(1)]),
+            glued: vec![[FaceId(0), FaceId(1)]],
             source_vertices: [0, 1],
         }
     );
@@ -458,10 +458,58 @@ fn fin_without_consistent_pair_is_cut_apart() {
     let b = build_ok(&input);
     assert!(matches!(
         &b.defects[0],
-        MeshDefect::NonManifoldEdge { glued: None, faces, .. } if faces.len() == 3
+        MeshDefect::NonManifoldEdge { glued, faces, .. } if glued.is_empty() && faces.len() == 3
     ));
     assert!(b.defects[0].to_string().contains("all are cut apart"));
     assert_eq!(b.mesh.components().len(), 3);
+}
+
+#[test]
+fn four_faces_on_an_edge_become_two_glued_sheets() {
+    // Two closed cubes (8 vertices each after welding) sharing one edge: x = 1, y = 1, z in [0, 1].
+    let a = cube_split_faces();
+    let mut b = cube_split_faces();
+    for p in &mut b.positions_m {
+        p[0] += 1.0;
+        p[1] += 1.0;
+    }
+    let built = build_ok(&concat(&[a, b]));
+    let edges: Vec<_> = built
+        .defects
+        .iter()
+        .filter_map(|d| match d {
+            MeshDefect::NonManifoldEdge { faces, glued, .. } => Some((faces.len(), glued.len())),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(edges, vec![(4, 2)]);
+    let text = built.defects[0].to_string();
+    assert!(
+        text.contains("stay joined as separate sheets") && !text.contains("cut off"),
+        "{text}"
+    );
+    // Both cubes stay closed spheres; the two shared corners are split, one copy per cube.
+    let comps = built.mesh.components();
+    assert_eq!(comps.len(), 2);
+    for c in &comps.components {
+        assert_eq!(
+            (
+                c.num_vertices,
+                c.num_boundary_loops,
+                c.genus,
+                c.euler_characteristic
+            ),
+            (8, 0, 0, 2)
+        );
+    }
+    let split: usize = built
+        .defects
+        .iter()
+        .filter(
+            |d| matches!(d, MeshDefect::NonManifoldVertex { vertices, .. } if vertices.len() == 2),
+        )
+        .count();
+    assert_eq!(split, 2);
 }
 
 #[test]
