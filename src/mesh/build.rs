@@ -39,6 +39,10 @@ pub struct BuiltMesh {
     /// Every repaired problem, each naming its elements. Order: degenerate triangles (by face),
     /// edge defects (by lowest face), non-manifold vertices (by source vertex), unreferenced vertices.
     pub defects: Vec<MeshDefect>,
+    /// Number of distinct welded vertices (used source vertices after welding by position and
+    /// group), before repair splits and isolated-face copies. `mesh.num_vertices()` is at least
+    /// this on a mesh without repeated-vertex faces.
+    pub num_welded_vertices: usize,
 }
 
 /// `-0.0` and `0.0` weld together: compare bits of the coordinate with the sign of zero cleared.
@@ -133,7 +137,7 @@ impl TriangleMesh {
         }
 
         // 2. Weld. `welded[s]` = lowest source index with the same group and position bits.
-        let welded = weld(input, &referenced);
+        let (welded, num_welded_vertices) = weld(input, &referenced);
         drop(referenced);
         let corner_source: Vec<u32> = tris.iter().flatten().copied().collect();
         let wv: Vec<u32> = corner_source.iter().map(|&s| welded[s as usize]).collect();
@@ -349,7 +353,11 @@ impl TriangleMesh {
             face_degeneracy,
         };
         debug_assert_eq!(mesh.check_invariants(), Ok(()));
-        Ok(BuiltMesh { mesh, defects })
+        Ok(BuiltMesh {
+            mesh,
+            defects,
+            num_welded_vertices,
+        })
     }
 }
 
@@ -360,8 +368,9 @@ fn next(h: usize) -> usize {
 }
 
 /// For every source vertex, the lowest source index with the same weld group and position bits
-/// (`-0.0 == 0.0`); unreferenced vertices map to themselves and are never used.
-fn weld(input: &MeshInput, referenced: &[bool]) -> Vec<u32> {
+/// (`-0.0 == 0.0`); unreferenced vertices map to themselves and are never used. Also returns the
+/// number of welded vertices.
+fn weld(input: &MeshInput, referenced: &[bool]) -> (Vec<u32>, usize) {
     let mut keys: Vec<(u32, [u64; 3], u32)> = input
         .positions_m
         .iter()
@@ -374,11 +383,13 @@ fn weld(input: &MeshInput, referenced: &[bool]) -> Vec<u32> {
     // same order whatever the thread count.
     keys.par_sort_unstable();
     let mut welded: Vec<u32> = (0..input.positions_m.len() as u32).collect();
+    let mut count = 0;
     for run in keys.chunk_by(|x, y| x.0 == y.0 && x.1 == y.1) {
         let rep = run[0].2;
+        count += 1;
         for e in run {
             welded[e.2 as usize] = rep;
         }
     }
-    welded
+    (welded, count)
 }

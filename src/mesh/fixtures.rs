@@ -15,12 +15,7 @@ use std::f64::consts::PI;
 use super::input::MeshInput;
 
 fn single_group(positions_m: Vec<[f64; 3]>, triangles: Vec<[u32; 3]>) -> MeshInput {
-    let weld_group = vec![0; positions_m.len()];
-    MeshInput {
-        positions_m,
-        triangles,
-        weld_group,
-    }
+    MeshInput::single_group(positions_m, triangles)
 }
 
 /// A flat `nx` × `ny` grid of unit squares in the z = 0 plane, each split into two triangles,

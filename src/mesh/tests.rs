@@ -402,6 +402,7 @@ fn bowtie_vertex_is_split_into_two_sheets() {
     );
     let m = &b.mesh;
     assert_eq!(m.num_vertices(), 6);
+    assert_eq!(b.num_welded_vertices, 5);
     assert_eq!(m.face_vertices(FaceId(0))[0], VertexId(0));
     assert_eq!(m.face_vertices(FaceId(1))[0], VertexId(1));
     assert_eq!(m.position(VertexId(0)), m.position(VertexId(1)));
@@ -577,6 +578,7 @@ fn degenerate_triangles_are_kept_reported_and_isolated_when_needed() {
     assert_eq!(m.face_neighbors(FaceId(3)), [None; 3]);
     assert_eq!(m.face_neighbors(FaceId(4)), [None; 3]);
     assert_eq!(m.num_vertices(), 11);
+    assert_eq!(b.num_welded_vertices, 5);
     assert_eq!(
         m.face_degeneracy(FaceId(4)),
         Some(DegenerateKind::RepeatedVertex)
