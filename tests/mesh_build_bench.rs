@@ -50,10 +50,17 @@ fn measure(name: &str, input: &MeshInput) {
         let t = Instant::now();
         let comps = built.mesh.components();
         let comp_secs = t.elapsed().as_secs_f64();
+        let genus: Vec<(u32, usize, i64)> = comps
+            .components
+            .iter()
+            .take(5)
+            .map(|c| (c.genus, c.num_boundary_loops, c.euler_characteristic))
+            .collect();
         summary = format!(
-            "{} faces, {} vertices, defects {:?} (first: {}), {} components, {} boundary loops; components() {:.3} s",
+            "{} faces, {} vertices ({} welded), defects {:?} (first: {}), {} components (first 5 as (genus, loops, χ): {genus:?}), {} boundary loops; components() {:.3} s",
             built.mesh.num_faces(),
             built.mesh.num_vertices(),
+            built.num_welded_vertices,
             by_code,
             built.defects.first().map(|d| d.to_string()).unwrap_or_default(),
             comps.len(),
