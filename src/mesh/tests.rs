@@ -863,3 +863,59 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Realistic damage on a closed torus: reversed faces, duplicated faces (as is or reversed),
+    /// shuffled face order. The result is always a valid mesh with every face kept, reversing a
+    /// face of a closed surface is always reported, and shuffling alone changes no topology.
+    #[test]
+    fn damaged_torus_is_repaired_and_reported(
+        flips in proptest::collection::vec(0usize..128, 0..4),
+        dups in proptest::collection::vec((0usize..128, any::<bool>()), 0..4),
+        shuffle in proptest::collection::vec(any::<proptest::sample::Index>(), 128),
+    ) {
+        let mut input = torus(8, 8, 2.0, 0.5);
+        // Shuffle the face order (a permutation by Fisher-Yates on the given indices).
+        for (i, idx) in shuffle.iter().enumerate().rev() {
+            let j = idx.index(i + 1);
+            input.triangles.swap(i, j);
+        }
+        let shuffled = build_ok(&input);
+        prop_assert!(shuffled.defects.is_empty());
+        prop_assert_eq!(shuffled.mesh.num_vertices(), 64);
+        let c = shuffled.mesh.components();
+        prop_assert_eq!((c.len(), c.components[0].genus), (1, 1));
+
+        let mut flipped = BTreeSet::new();
+        for &f in &flips {
+            input.triangles[f].swap(1, 2);
+            if !flipped.insert(f) {
+                flipped.remove(&f);
+            }
+        }
+        for &(f, reverse) in &dups {
+            let mut t = input.triangles[f];
+            if reverse {
+                t.swap(1, 2);
+            }
+            input.triangles.push(t);
+        }
+        let b = build_ok(&input);
+        let orientation_or_edge = b.defects.iter().any(|d| matches!(
+            d,
+            MeshDefect::InconsistentOrientation { .. } | MeshDefect::NonManifoldEdge { .. }
+        ));
+        prop_assert_eq!(orientation_or_edge, !flipped.is_empty() || !dups.is_empty());
+        if flipped.is_empty() && dups.is_empty() {
+            prop_assert!(b.defects.is_empty());
+        }
+        // Every face named by a defect exists, and every edge defect names the faces on it.
+        for d in &b.defects {
+            for f in d.faces() {
+                prop_assert!(f.index() < b.mesh.num_faces());
+            }
+        }
+    }
+}
