@@ -12,8 +12,8 @@
 //! 3. Faces with a repeated welded vertex are isolated (their corners become vertices of their own).
 //! 4. Group half-edges by undirected welded edge (bucket by lower end, sort each bucket) and glue:
 //!    exactly one half-edge each way → glued; otherwise repair (cut) and report.
-//! 5. Fans: union-find over corners, joining the two corners at each end of every glued edge.
-//!    Each set is one final vertex, so a welded vertex with several fans is split, one copy per
+//! 5. Fans: rotate around each corner's vertex through the glued half-edges (`opposite(prev(h))`).
+//!    Each fan is one final vertex, so a welded vertex with several fans is split, one copy per
 //!    fan (non-manifold vertex repair). Final vertices are numbered by (lowest source index, lowest
 //!    corner), so on clean input with every position used, `VertexId(i)` is source vertex `i`.
 //!
@@ -53,17 +53,6 @@ fn weld_bits(x: f64) -> u64 {
     } else {
         x.to_bits()
     }
-}
-
-/// Union-find root lookup with path halving.
-#[inline]
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
-    while parent[x as usize] != x {
-        let p = parent[x as usize];
-        parent[x as usize] = parent[p as usize];
-        x = parent[x as usize];
-    }
-    x
 }
 
 impl TriangleMesh {
@@ -171,20 +160,6 @@ impl TriangleMesh {
         // 4. Glue half-edges by undirected welded edge.
         let nh = 3 * nf;
         let mut opposite = vec![NONE; nh];
-        let mut parent: Vec<u32> = (0..nh as u32).collect();
-        let key = |c: u32| (u64::from(corner_source[c as usize]) << 32) | u64::from(c);
-        let union = |parent: &mut [u32], x: u32, y: u32| {
-            let (rx, ry) = (find(parent, x), find(parent, y));
-            if rx != ry {
-                // The root is always the corner with the smallest key, so roots name vertices
-                // deterministically.
-                if key(rx) < key(ry) {
-                    parent[ry as usize] = rx;
-                } else {
-                    parent[rx as usize] = ry;
-                }
-            }
-        };
         let mut edge_defects = Vec::new();
         {
             // Bucket half-edges by their lower welded end point (counting sort), then sort each
@@ -225,8 +200,6 @@ impl TriangleMesh {
                             if wv[hx as usize] != wv[hy as usize] {
                                 opposite[hx as usize] = hy;
                                 opposite[hy as usize] = hx;
-                                union(&mut parent, hx, next(hy as usize) as u32);
-                                union(&mut parent, hy, next(hx as usize) as u32);
                             } else {
                                 edge_defects.push(MeshDefect::InconsistentOrientation {
                                     faces: [FaceId(hx / 3), FaceId(hy / 3)],
@@ -256,8 +229,6 @@ impl TriangleMesh {
                                 .map(|(&h0, &h1)| {
                                     opposite[h0 as usize] = h1;
                                     opposite[h1 as usize] = h0;
-                                    union(&mut parent, h0, next(h1 as usize) as u32);
-                                    union(&mut parent, h1, next(h0 as usize) as u32);
                                     let (f0, f1) = (FaceId(h0 / 3), FaceId(h1 / 3));
                                     [f0.min(f1), f0.max(f1)]
                                 })
@@ -275,48 +246,86 @@ impl TriangleMesh {
         edge_defects.sort_by_key(|d| d.faces().first().copied());
         defects.append(&mut edge_defects);
 
-        // 5. Final vertices = union-find roots, numbered by (lowest source index, lowest corner).
-        let mut roots: Vec<u64> = Vec::new();
-        for c in 0..nh as u32 {
-            let r = find(&mut parent, c);
-            parent[c as usize] = r;
-            if r == c {
-                roots.push(key(c));
+        // 5. Fans. Rotating around a vertex with `h -> opposite(prev(h))` walks one fan; each fan
+        // becomes one vertex, so a welded vertex with several fans is split. Rotation is
+        // injective (prev and opposite are), so every walk ends on the boundary or returns to its
+        // start. Corners are visited in ascending order: a fan is found at its lowest corner.
+        let mut fan_of = vec![NONE; nh];
+        // Per fan: (lowest source index << 32 | lowest corner), the final vertex order key.
+        let mut fan_key: Vec<u64> = Vec::new();
+        // Per fan: its first outgoing half-edge, the boundary one if the fan is open.
+        let mut fan_start: Vec<u32> = Vec::new();
+        for c in 0..nh {
+            if fan_of[c] != NONE {
+                continue;
             }
+            let mut start = c;
+            loop {
+                let o = opposite[start];
+                if o == NONE {
+                    break;
+                }
+                let p = next(o as usize);
+                if p == c {
+                    start = c;
+                    break;
+                }
+                start = p;
+            }
+            let id = fan_key.len() as u32;
+            let mut min_src = u32::MAX;
+            let mut h = start;
+            loop {
+                fan_of[h] = id;
+                min_src = min_src.min(corner_source[h]);
+                let o = opposite[prev(h)];
+                if o == NONE || o as usize == start {
+                    break;
+                }
+                h = o as usize;
+            }
+            fan_key.push((u64::from(min_src) << 32) | c as u64);
+            fan_start.push(start as u32);
         }
-        roots.sort_unstable();
-        let nv = roots.len();
-        let mut corner_vertex = vec![VertexId(0); nh];
-        let mut positions_m = Vec::with_capacity(nv);
-        let mut vertex_source = Vec::with_capacity(nv);
-        let mut vertex_weld_group = Vec::with_capacity(nv);
-        for (id, &k) in roots.iter().enumerate() {
-            let (src, root) = ((k >> 32) as usize, (k & 0xffff_ffff) as usize);
-            corner_vertex[root] = VertexId(id as u32);
+        let nfans = fan_key.len();
+        let mut order = fan_key;
+        order.sort_unstable();
+        let mut rank = vec![0u32; nfans];
+        let mut positions_m = Vec::with_capacity(nfans);
+        let mut vertex_source = Vec::with_capacity(nfans);
+        let mut vertex_weld_group = Vec::with_capacity(nfans);
+        let mut vertex_halfedge = Vec::with_capacity(nfans);
+        for (r, &k) in order.iter().enumerate() {
+            let (src, first) = ((k >> 32) as usize, (k & 0xffff_ffff) as usize);
+            let fan = fan_of[first] as usize;
+            rank[fan] = r as u32;
             positions_m.push(pos[src]);
             vertex_source.push(src as u32);
             vertex_weld_group.push(input.weld_group[src]);
+            vertex_halfedge.push(HalfedgeId(fan_start[fan]));
         }
-        for c in 0..nh {
-            corner_vertex[c] = corner_vertex[parent[c] as usize];
-        }
+        drop(fan_start);
+        let corner_vertex: Vec<VertexId> =
+            fan_of.iter().map(|&f| VertexId(rank[f as usize])).collect();
+        drop(fan_of);
+        drop(rank);
 
         // Non-manifold vertices: welded vertices that ended up with more than one fan
         // (corners of isolated degenerate faces are not fans and were reported already).
         let mut fans = vec![0u32; ns];
-        for &k in &roots {
-            let root = (k & 0xffff_ffff) as usize;
-            if !isolated(root / 3) {
-                fans[wv[root] as usize] += 1;
+        for &k in &order {
+            let first = (k & 0xffff_ffff) as usize;
+            if !isolated(first / 3) {
+                fans[wv[first] as usize] += 1;
             }
         }
-        let mut split: Vec<(u32, VertexId)> = roots
+        let mut split: Vec<(u32, VertexId)> = order
             .iter()
             .enumerate()
             .filter_map(|(id, &k)| {
-                let root = (k & 0xffff_ffff) as usize;
-                let w = wv[root];
-                (!isolated(root / 3) && fans[w as usize] > 1).then_some((w, VertexId(id as u32)))
+                let first = (k & 0xffff_ffff) as usize;
+                let w = wv[first];
+                (!isolated(first / 3) && fans[w as usize] > 1).then_some((w, VertexId(id as u32)))
             })
             .collect();
         drop(fans);
@@ -331,15 +340,6 @@ impl TriangleMesh {
             defects.push(MeshDefect::UnreferencedVertices {
                 source_vertices: unreferenced,
             });
-        }
-
-        // One outgoing half-edge per vertex: the boundary one if any (lowest id otherwise).
-        let mut vertex_halfedge = vec![HalfedgeId(NONE); nv];
-        for c in 0..nh {
-            let slot = &mut vertex_halfedge[corner_vertex[c].index()];
-            if slot.0 == NONE || (opposite[c] == NONE && opposite[slot.index()] != NONE) {
-                *slot = HalfedgeId(c as u32);
-            }
         }
 
         let mesh = TriangleMesh {
@@ -365,6 +365,12 @@ impl TriangleMesh {
 #[inline]
 fn next(h: usize) -> usize {
     h - h % 3 + (h % 3 + 1) % 3
+}
+
+/// Index of the previous corner in the same face.
+#[inline]
+fn prev(h: usize) -> usize {
+    h - h % 3 + (h % 3 + 2) % 3
 }
 
 /// For every source vertex, the lowest source index with the same weld group and position bits
