@@ -422,6 +422,11 @@ fn weld_with_hash(
     let mut welded: Vec<u32> = (0..input.positions_m.len() as u32).collect();
     let mut count = 0;
     for run in hashed.chunk_by(|x, y| x.0 == y.0) {
+        if run.len() == 1 {
+            // Most vertices: a unique hash, nothing to compare (and no random position read).
+            count += 1;
+            continue;
+        }
         let first = key_of(run[0].1);
         if run.iter().all(|&(_, s)| key_of(s) == first) {
             // The usual case: one position (the run is in source order, so run[0] is lowest).
