@@ -4,18 +4,25 @@
 //! [`MeshBuildError`]; everything else is repaired according to the policy in [`crate::mesh`] and
 //! reported as [`MeshDefect`]s.
 //!
-//! Algorithm (all steps sort- or array-based; O(n log n) worst case, no hashing, no per-vertex
-//! `Vec`s, deterministic whatever the rayon thread count because every sort key is unique):
+//! Algorithm (all steps sort- or array-based; O(n log n) worst case even on hostile input, no
+//! hash maps, no per-vertex `Vec`s, deterministic whatever the rayon thread count because every
+//! sort key is unique):
 //! 1. Validate sizes, indices and coordinates of referenced vertices.
-//! 2. Weld: sort referenced source vertices by `(weld group, x, y, z bits, index)`; each run of
-//!    equal keys becomes one welded vertex, named by its lowest source index.
-//! 3. Faces with a repeated welded vertex are isolated (their corners become vertices of their own).
+//! 2. Weld: sort referenced source vertices by `(hash of (weld group, x, y, z bits), index)`;
+//!    each run of equal hashes is confirmed (or, on a collision, split) by the full key, and each
+//!    group of equal keys becomes one welded vertex, named by its lowest source index.
+//! 3. Degenerate faces: repeated welded vertex, or zero area (`geometry::triangle_is_zero_area`).
+//!    Faces with a repeated vertex are isolated (their corners become vertices of their own).
 //! 4. Group half-edges by undirected welded edge (bucket by lower end, sort each bucket) and glue:
-//!    exactly one half-edge each way → glued; otherwise repair (cut) and report.
+//!    exactly one half-edge each way → glued; otherwise repair (pair greedily or cut) and report.
 //! 5. Fans: rotate around each corner's vertex through the glued half-edges (`opposite(prev(h))`).
 //!    Each fan is one final vertex, so a welded vertex with several fans is split, one copy per
 //!    fan (non-manifold vertex repair). Final vertices are numbered by (lowest source index, lowest
 //!    corner), so on clean input with every position used, `VertexId(i)` is source vertex `i`.
+//!
+//! Measured (`tests/mesh_build_bench.rs`, opt-level 3, shared 2-core machine under load): about
+//! 0.25 s for a 1M-triangle grid and 0.35 s for the 1M-triangle `beast_sub2_1M` (random vertex
+//! order costs cache misses), about 130 bytes per face at peak including the input.
 //!
 //! Units: positions in model units (`_m`), untouched (no transform, no rescaling).
 use rayon::iter::{IntoParallelIterator, ParallelIterator};
