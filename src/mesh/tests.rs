@@ -919,3 +919,29 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn hostile_edge_shared_by_many_faces_is_handled_in_linear_time() {
+    // 100k triangles on the edge 0-1, alternating direction: a "book" with 100k pages.
+    let n = 100_000u32;
+    let mut positions_m = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]];
+    let mut triangles = Vec::new();
+    for i in 0..n {
+        let a = 2.0 * std::f64::consts::PI * f64::from(i) / f64::from(n);
+        positions_m.push([0.5, a.cos(), a.sin()]);
+        triangles.push(if i % 2 == 0 {
+            [0, 1, i + 2]
+        } else {
+            [1, 0, i + 2]
+        });
+    }
+    let b = build_ok(&MeshInput::single_group(positions_m, triangles));
+    let MeshDefect::NonManifoldEdge { faces, glued, .. } = &b.defects[0] else {
+        panic!("{:?}", b.defects.first())
+    };
+    assert_eq!((faces.len(), glued.len()), (n as usize, n as usize / 2));
+    assert_eq!(glued[1], [FaceId(2), FaceId(3)]);
+    // Each glued pair is its own sheet: both edge end points get n/2 copies.
+    assert_eq!(b.mesh.num_vertices(), n as usize + 2 * (n as usize / 2));
+    assert_eq!(b.mesh.components().len(), n as usize / 2);
+}
