@@ -39,6 +39,16 @@ fn check_against_input(input: &MeshInput, m: &TriangleMesh) {
             );
         }
     }
+    // Source vertices per vertex, collected from the face list, match the one-ring answer.
+    let mut sources: Vec<BTreeSet<u32>> = vec![BTreeSet::new(); m.num_vertices()];
+    for c in (0..m.num_corners() as u32).map(CornerId) {
+        sources[m.corner_vertex(c).index()].insert(m.corner_source(c));
+    }
+    for v in m.vertices() {
+        let expected: Vec<u32> = sources[v.index()].iter().copied().collect();
+        assert_eq!(m.source_vertices_of(v), expected, "{v}");
+        assert_eq!(Some(&m.vertex_source(v)), expected.first(), "{v}");
+    }
 }
 
 /// Euler characteristic and boundary-edge count recomputed from face vertex triples only.
