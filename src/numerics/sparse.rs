@@ -129,6 +129,56 @@ impl CsrMatrix {
         })
     }
 
+    /// Builds a matrix from CSR arrays, checking every invariant of the module doc. Used when
+    /// the caller knows the sparsity pattern in advance (e.g. from mesh adjacency), which
+    /// avoids materializing one triplet per contribution.
+    pub fn from_csr_parts(
+        nrows: usize,
+        ncols: usize,
+        row_ptr: Vec<usize>,
+        col_idx: Vec<u32>,
+        values: Vec<f64>,
+    ) -> Result<Self, SparseError> {
+        let bad = |got: usize, expected: usize| SparseError::DimensionMismatch { expected, got };
+        if row_ptr.len() != nrows + 1 {
+            return Err(bad(row_ptr.len(), nrows + 1));
+        }
+        let nnz = row_ptr[nrows];
+        if row_ptr[0] != 0 || col_idx.len() != nnz {
+            return Err(bad(col_idx.len(), nnz));
+        }
+        if values.len() != nnz {
+            return Err(bad(values.len(), nnz));
+        }
+        for r in 0..nrows {
+            let (a, b) = (row_ptr[r], row_ptr[r + 1]);
+            if a > b || b > nnz {
+                return Err(bad(b, a));
+            }
+            for k in a..b {
+                let c = col_idx[k];
+                if c as usize >= ncols || (k > a && col_idx[k - 1] >= c) {
+                    return Err(SparseError::IndexOutOfBounds {
+                        row: r as u32,
+                        col: c,
+                        nrows,
+                        ncols,
+                    });
+                }
+                if !values[k].is_finite() {
+                    return Err(SparseError::NonFinite { row: r as u32, col: c });
+                }
+            }
+        }
+        Ok(Self {
+            nrows,
+            ncols,
+            row_ptr,
+            col_idx,
+            values,
+        })
+    }
+
     /// Number of rows.
     pub fn nrows(&self) -> usize {
         self.nrows
@@ -289,6 +339,21 @@ mod tests {
             let expect: f64 = (0..3).map(|r| dense[r][c] * x[r]).sum();
             assert_eq!(yt[c], expect);
         }
+    }
+
+    #[test]
+    fn csr_parts_are_checked() {
+        let a = CsrMatrix::from_csr_parts(2, 2, vec![0, 1, 3], vec![1, 0, 1], vec![2.0, 3.0, 4.0])
+            .expect("valid");
+        assert_eq!(a.mul_vec(&[1.0, 10.0]).expect("shape"), vec![20.0, 43.0]);
+        // unsorted columns in row 1
+        assert!(CsrMatrix::from_csr_parts(2, 2, vec![0, 1, 3], vec![1, 1, 0], vec![1.0; 3]).is_err());
+        // column out of range
+        assert!(CsrMatrix::from_csr_parts(2, 2, vec![0, 1, 2], vec![1, 2], vec![1.0; 2]).is_err());
+        // bad row_ptr length
+        assert!(CsrMatrix::from_csr_parts(2, 2, vec![0, 1], vec![1], vec![1.0]).is_err());
+        // non-finite
+        assert!(CsrMatrix::from_csr_parts(1, 1, vec![0, 1], vec![0], vec![f64::INFINITY]).is_err());
     }
 
     #[test]
