@@ -23,6 +23,7 @@ use anyhow::{bail, Context};
 use serde::{Deserialize, Serialize};
 
 use crate::atlas::parameterize::chart::ChartMesh;
+use crate::atlas::parameterize::hlscm::{build_hierarchy, HlscmOptions};
 use crate::atlas::parameterize::lscm::{diameter_pins, LscmSystem};
 use crate::atlas::parameterize::{
     conformal_energy, flipped_faces, parameterize_chart, ParameterizeMethod, ParameterizeOptions,
@@ -79,6 +80,8 @@ pub struct BenchRow {
     pub flipped_faces: usize,
     /// HLSCM levels (vertices, iterations), coarsest first.
     pub levels: Vec<(usize, usize)>,
+    /// Seconds per phase, when the method has phases (HLSCM).
+    pub phases: Vec<(String, f64)>,
 }
 
 /// Deterministic disk-topology height field with multi-scale bumps, about `triangles`
@@ -229,22 +232,34 @@ pub fn run_method(
     cg_timeout_s: f64,
 ) -> anyhow::Result<BenchRow> {
     let start = Instant::now();
+    let mut phases: Vec<(String, f64)> = Vec::new();
     let (uv, iterations, converged, levels) = match method {
-        BenchMethod::LscmDirect | BenchMethod::Hlscm => {
+        BenchMethod::LscmDirect => {
             let options = ParameterizeOptions {
-                method: if method == BenchMethod::Hlscm {
-                    ParameterizeMethod::Hierarchical
-                } else {
-                    ParameterizeMethod::Direct
-                },
+                method: ParameterizeMethod::Direct,
                 ..ParameterizeOptions::default()
             };
             let map = parameterize_chart(chart, &options)?;
-            let (converged, levels) = match &map.hlscm {
-                Some(r) => (r.converged, r.levels.iter().map(|l| (l.vertices, l.iterations)).collect()),
-                None => (true, Vec::new()),
-            };
-            (map.uv, map.iterations, converged, levels)
+            (map.uv, map.iterations, true, Vec::new())
+        }
+        BenchMethod::Hlscm => {
+            // Same steps as `parameterize_chart` with `Hierarchical`, split to time the phases
+            // as hlscm-2003 Table 1 does ("PM construction" vs "multigrid").
+            let options = HlscmOptions::default();
+            let topology = chart.validate()?;
+            let pins = diameter_pins(chart, &topology);
+            let t0 = Instant::now();
+            let hierarchy = build_hierarchy(chart, &topology, &pins, &options)?;
+            let t1 = Instant::now();
+            let (uv, report) = hierarchy.solve(&options, &mut |_| ControlFlow::Continue(()))?;
+            let t2 = Instant::now();
+            phases = vec![
+                ("validate+pins".to_string(), (t0 - start).as_secs_f64()),
+                ("hierarchy".to_string(), (t1 - t0).as_secs_f64()),
+                ("cascadic solve".to_string(), (t2 - t1).as_secs_f64()),
+            ];
+            let levels = report.levels.iter().map(|l| (l.vertices, l.iterations)).collect();
+            (uv, report.finest_iterations, report.converged, levels)
         }
         BenchMethod::LscmCg => {
             let topology = chart.validate()?;
@@ -287,6 +302,7 @@ pub fn run_method(
         converged,
         flipped_faces: flipped_faces(chart, &uv).len(),
         levels,
+        phases,
     })
 }
 
@@ -366,6 +382,9 @@ pub fn format_table(rows: &[BenchRow]) -> String {
             r.flipped_faces,
             levels.join(" ")
         ));
+        for (name, secs) in &r.phases {
+            s.push_str(&format!("{:<22}   phase {name}: {secs:.3} s\n", ""));
+        }
     }
     s
 }

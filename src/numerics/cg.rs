@@ -62,17 +62,68 @@ pub struct CgOutcome {
     pub converged: bool,
 }
 
+/// A symmetric positive definite approximation `M⁻¹` of `A⁻¹`, applied as `z = M⁻¹·r`.
+/// Implementations must be deterministic (same bits whatever the thread count).
+pub trait Preconditioner: Sync {
+    /// Writes `M⁻¹·r` into `z` (same length as `r`).
+    fn apply(&self, r: &[f64], z: &mut [f64]);
+}
+
+/// The Jacobi preconditioner `M = diag(A)`. Non-positive diagonal entries are treated as 1
+/// (the matrix is then not SPD and the result is whatever CG gives).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Jacobi {
+    inv_diag: Vec<f64>,
+}
+
+impl Jacobi {
+    /// Builds `diag(A)⁻¹`.
+    pub fn new(a: &CsrMatrix) -> Self {
+        Self {
+            inv_diag: a
+                .diagonal()
+                .into_iter()
+                .map(|d| if d > 0.0 && d.is_finite() { 1.0 / d } else { 1.0 })
+                .collect(),
+        }
+    }
+
+    /// `diag(A)⁻¹` as a vector.
+    pub fn inverse_diagonal(&self) -> &[f64] {
+        &self.inv_diag
+    }
+}
+
+impl Preconditioner for Jacobi {
+    fn apply(&self, r: &[f64], z: &mut [f64]) {
+        z.par_iter_mut()
+            .zip(r.par_iter().zip(&self.inv_diag))
+            .for_each(|(zi, (ri, di))| *zi = ri * di);
+    }
+}
+
 /// Solves `A·x = b` for symmetric positive definite `A`, starting from the given `x` (warm
 /// start), with the Jacobi (diagonal) preconditioner. `monitor` is called after every
 /// iteration and may stop the solve (cancellation, time limits, energy targets).
 ///
-/// Errors: shape mismatch. Non-positive diagonal entries are treated as 1 in the
-/// preconditioner (the matrix is then not SPD and the result is whatever CG gives).
+/// Errors: shape mismatch.
 /// Cost per iteration: one `O(nnz)` product and `O(n)` vector work.
 pub fn solve_cg(
     a: &CsrMatrix,
     b: &[f64],
     x: &mut [f64],
+    options: &CgOptions,
+    monitor: &mut dyn FnMut(&CgStep<'_>) -> ControlFlow<()>,
+) -> Result<CgOutcome, SparseError> {
+    solve_pcg(a, b, x, &Jacobi::new(a), options, monitor)
+}
+
+/// [`solve_cg`] with any symmetric positive definite preconditioner (Shewchuk §B3).
+pub fn solve_pcg(
+    a: &CsrMatrix,
+    b: &[f64],
+    x: &mut [f64],
+    preconditioner: &dyn Preconditioner,
     options: &CgOptions,
     monitor: &mut dyn FnMut(&CgStep<'_>) -> ControlFlow<()>,
 ) -> Result<CgOutcome, SparseError> {
@@ -94,14 +145,10 @@ pub fn solve_cg(
             converged: true,
         });
     }
-    let inv_diag: Vec<f64> = a
-        .diagonal()
-        .into_iter()
-        .map(|d| if d > 0.0 && d.is_finite() { 1.0 / d } else { 1.0 })
-        .collect();
     let mut r = a.mul_vec(x)?;
     r.par_iter_mut().zip(b).for_each(|(ri, bi)| *ri = bi - *ri);
-    let mut z: Vec<f64> = r.iter().zip(&inv_diag).map(|(ri, di)| ri * di).collect();
+    let mut z = vec![0.0; n];
+    preconditioner.apply(&r, &mut z);
     let mut p = z.clone();
     let mut ap = vec![0.0; n];
     let mut rz = dot(&r, &z);
@@ -121,9 +168,7 @@ pub fn solve_cg(
         r.par_iter_mut()
             .zip(&ap)
             .for_each(|(ri, api)| *ri -= alpha * api);
-        z.par_iter_mut()
-            .zip(r.par_iter().zip(&inv_diag))
-            .for_each(|(zi, (ri, di))| *zi = ri * di);
+        preconditioner.apply(&r, &mut z);
         let rz_new = dot(&r, &z);
         let beta = rz_new / rz;
         rz = rz_new;

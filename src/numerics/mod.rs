@@ -4,7 +4,8 @@
 //! geometry so that they can be tested against dense references:
 //! - [`sparse`]: triplet assembly into a compressed sparse row matrix ([`CsrMatrix`]), with
 //!   duplicates summed in a fixed order, and a row-parallel matrix-vector product.
-//! - [`cg`]: Jacobi-preconditioned conjugate gradients with a stated stopping rule
+//! - [`cg`]: preconditioned conjugate gradients (Jacobi, or any [`Preconditioner`], e.g. the
+//!   HLSCM multilevel one) with a stated stopping rule
 //!   (relative residual `‖b − A·x‖₂ ≤ tol·‖b‖₂`, or an iteration cap).
 //! - [`sparse_cholesky`]: a sparse direct solve through faer's supernodal Cholesky with an AMD
 //!   fill-reducing ordering. This is the ONLY module that names faer, so that faer's generic
@@ -22,6 +23,6 @@ pub mod cg;
 pub mod sparse;
 pub mod sparse_cholesky;
 
-pub use cg::{solve_cg, CgOptions, CgOutcome};
+pub use cg::{solve_cg, solve_pcg, CgOptions, CgOutcome, CgStep, Jacobi, Preconditioner};
 pub use sparse::{CsrMatrix, SparseError, Triplet};
 pub use sparse_cholesky::{CholeskyError, SparseCholesky};

@@ -228,6 +228,12 @@ impl LscmSystem {
         })
     }
 
+    /// Free-vertex number of each chart vertex (`u32::MAX` for pinned vertices); free vertex
+    /// `k` owns unknowns `2k` (u) and `2k + 1` (v).
+    pub fn free_index_map(&self) -> &[u32] {
+        &self.free_index
+    }
+
     /// Number of real unknowns, `2(n − p)`.
     pub fn unknowns(&self) -> usize {
         self.rhs.len()

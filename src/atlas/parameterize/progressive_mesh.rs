@@ -290,7 +290,14 @@ struct Decimator<'a> {
     boundary_vertices: usize,
     max_defect_rad: f64,
     ring_u: Vec<u32>,
-    ring_v: Vec<u32>,
+    /// Candidate buffer of `best_collapse`: (priority, target, faces on the edge).
+    candidates: Vec<(f64, u32, usize)>,
+    /// Link-condition marks: `in_ring_u[w] == ring_epoch` iff `w` is in the current `u`'s ring;
+    /// `seen[w] == seen_epoch` iff `w` was already counted for the current candidate.
+    in_ring_u: Vec<u32>,
+    ring_epoch: u32,
+    seen: Vec<u32>,
+    seen_epoch: u32,
 }
 
 impl<'a> Decimator<'a> {
@@ -326,7 +333,11 @@ impl<'a> Decimator<'a> {
             boundary_vertices: 0,
             max_defect_rad: options.max_angular_defect_rad,
             ring_u: Vec::new(),
-            ring_v: Vec::new(),
+            candidates: Vec::new(),
+            in_ring_u: vec![0; n],
+            ring_epoch: 0,
+            seen: vec![0; n],
+            seen_epoch: 0,
         };
         let mut ring = Vec::new();
         for u in 0..n as u32 {
@@ -374,7 +385,6 @@ impl<'a> Decimator<'a> {
             return None;
         }
         let mut ring_u = std::mem::take(&mut self.ring_u);
-        let mut ring_v = std::mem::take(&mut self.ring_v);
         ring_u.clear();
         self.ring(u, &mut ring_u);
         let boundary_u = ring_u.len() != self.vertex_faces[ui].len();
@@ -389,29 +399,54 @@ impl<'a> Decimator<'a> {
             angle_sum += norm3(cross(a, b)).atan2(dot3(a, b));
         }
         let defect = if boundary_u { PI } else { 2.0 * PI } - angle_sum;
-        let mut best: Option<(f64, u32)> = None;
+        // Cost every candidate first (cheap), then check the link condition in order of
+        // cost: it rarely fails, so usually only the cheapest candidate pays for it.
+        let mut candidates = std::mem::take(&mut self.candidates);
+        candidates.clear();
         if defect.abs() <= self.max_defect_rad && (!boundary_u || self.boundary_vertices > 4) {
             for &v in &ring_u {
                 let on_edge = self.faces_on_edge(u, v);
                 if boundary_u && on_edge != 1 {
                     continue; // a boundary vertex only slides along the boundary
                 }
-                ring_v.clear();
-                self.ring(v, &mut ring_v);
-                if count_common(&ring_u, &ring_v) != on_edge {
-                    continue; // link condition: the collapse would make the mesh non-manifold
-                }
                 let Some(loss) = self.collapse_loss(u, v, boundary_u, &ring_u) else {
                     continue;
                 };
-                let priority = loss + self.accumulated_m[ui];
-                if best.is_none_or(|(p, _)| priority < p) {
+                candidates.push((loss + self.accumulated_m[ui], v, on_edge));
+            }
+        }
+        candidates.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let mut best = None;
+        if !candidates.is_empty() {
+            self.ring_epoch = self.ring_epoch.wrapping_add(1);
+            for &w in &ring_u {
+                self.in_ring_u[w as usize] = self.ring_epoch;
+            }
+            for &(priority, v, on_edge) in &candidates {
+                // Link condition: the common neighbours of u and v are exactly the opposite
+                // vertices of the faces on the edge, otherwise the mesh becomes non-manifold.
+                self.seen_epoch = self.seen_epoch.wrapping_add(1);
+                let mut common = 0usize;
+                for &f in &self.vertex_faces[v as usize] {
+                    for &w in &self.faces[f as usize] {
+                        let wi = w as usize;
+                        if w != v
+                            && self.in_ring_u[wi] == self.ring_epoch
+                            && self.seen[wi] != self.seen_epoch
+                        {
+                            self.seen[wi] = self.seen_epoch;
+                            common += 1;
+                        }
+                    }
+                }
+                if common == on_edge {
                     best = Some((priority, v));
+                    break;
                 }
             }
         }
+        self.candidates = candidates;
         self.ring_u = ring_u;
-        self.ring_v = ring_v;
         best
     }
 
@@ -510,22 +545,6 @@ impl<'a> Decimator<'a> {
             barycentric: best.1,
         }
     }
-}
-
-fn count_common(a: &[u32], b: &[u32]) -> usize {
-    let (mut i, mut j, mut n) = (0, 0, 0);
-    while i < a.len() && j < b.len() {
-        match a[i].cmp(&b[j]) {
-            std::cmp::Ordering::Less => i += 1,
-            std::cmp::Ordering::Greater => j += 1,
-            std::cmp::Ordering::Equal => {
-                n += 1;
-                i += 1;
-                j += 1;
-            }
-        }
-    }
-    n
 }
 
 /// Barycentric coordinates of the point of triangle `abc` closest to `p`, and the squared
