@@ -106,81 +106,90 @@ impl ChartMesh {
         if let Some(v) = used.iter().position(|u| !u) {
             return Err(ParameterizeError::UnreferencedVertex { vertex: v as u32 });
         }
-        // Directed edges, sorted: a directed edge used twice means two faces traverse an edge in
-        // the same direction (inconsistent orientation) or more than two faces share it.
-        let mut directed: Vec<(u32, u32)> = Vec::with_capacity(self.triangles.len() * 3);
+        // Half-edges bucketed by source vertex (counting sort, O(F)): half-edge a→b of face
+        // (a, b, c) stores `to = b` and `third = c`. Vertex degrees are small, so lookups inside
+        // a bucket are linear scans.
+        let mut out_ptr = vec![0usize; n + 1];
         for t in &self.triangles {
-            for k in 0..3 {
-                directed.push((t[k], t[(k + 1) % 3]));
+            for &i in t {
+                out_ptr[i as usize + 1] += 1;
             }
         }
-        directed.sort_unstable();
-        if let Some(w) = directed.windows(2).find(|w| w[0] == w[1]) {
-            return Err(ParameterizeError::NonManifoldEdge {
-                a: w[0].0,
-                b: w[0].1,
-            });
+        for v in 0..n {
+            out_ptr[v + 1] += out_ptr[v];
         }
-        let has = |a: u32, b: u32| directed.binary_search(&(a, b)).is_ok();
+        let mut fill = out_ptr.clone();
+        let mut out_to = vec![0u32; out_ptr[n]];
+        let mut out_third = vec![0u32; out_ptr[n]];
+        for t in &self.triangles {
+            for k in 0..3 {
+                let a = t[k] as usize;
+                out_to[fill[a]] = t[(k + 1) % 3];
+                out_third[fill[a]] = t[(k + 2) % 3];
+                fill[a] += 1;
+            }
+        }
+        let bucket = |v: u32| out_ptr[v as usize]..out_ptr[v as usize + 1];
+        let has = |a: u32, b: u32| out_to[bucket(a)].contains(&b);
+        // A directed edge used twice means two faces traverse an edge in the same direction
+        // (inconsistent orientation) or more than two faces share it.
+        for a in 0..n as u32 {
+            let tos = &out_to[bucket(a)];
+            for (i, &b) in tos.iter().enumerate() {
+                if tos[..i].contains(&b) {
+                    return Err(ParameterizeError::NonManifoldEdge { a, b });
+                }
+            }
+        }
         // Boundary half-edges: (a, b) whose twin (b, a) does not exist.
         let mut boundary_next: Vec<Option<u32>> = vec![None; n];
+        let mut boundary_prev: Vec<Option<u32>> = vec![None; n];
         let mut boundary_edges = 0usize;
-        for &(a, b) in &directed {
-            if !has(b, a) {
-                if boundary_next[a as usize].is_some() {
-                    // Two boundary edges leave `a`: two fans touch at `a` (a bow-tie).
-                    return Err(ParameterizeError::NonManifoldVertex { vertex: a });
+        for a in 0..n as u32 {
+            for &b in &out_to[bucket(a)] {
+                if !has(b, a) {
+                    if boundary_next[a as usize].is_some() {
+                        // Two boundary edges leave `a`: two fans touch at `a` (a bow-tie).
+                        return Err(ParameterizeError::NonManifoldVertex { vertex: a });
+                    }
+                    boundary_next[a as usize] = Some(b);
+                    boundary_prev[b as usize] = Some(a);
+                    boundary_edges += 1;
                 }
-                boundary_next[a as usize] = Some(b);
-                boundary_edges += 1;
             }
         }
         // Undirected edge count: interior edges appear twice among the directed ones.
-        let edges = (directed.len() + boundary_edges) / 2;
-        // Adjacency (CSR) from the undirected edges, sorted and deduplicated per vertex.
-        let mut pairs: Vec<(u32, u32)> = directed
-            .iter()
-            .flat_map(|&(a, b)| [(a, b), (b, a)])
-            .collect();
-        pairs.sort_unstable();
-        pairs.dedup();
-        let mut neighbor_ptr = vec![0usize; n + 1];
-        for &(a, _) in &pairs {
-            neighbor_ptr[a as usize + 1] += 1;
-        }
+        let edges = (out_to.len() + boundary_edges) / 2;
+        // Adjacency (CSR): the targets of outgoing half-edges, plus the source of the incoming
+        // boundary half-edge (whose twin does not exist), sorted per vertex.
+        let mut neighbor_ptr = Vec::with_capacity(n + 1);
+        neighbor_ptr.push(0usize);
+        let mut neighbors: Vec<u32> = Vec::with_capacity(out_to.len() + boundary_edges);
         for v in 0..n {
-            neighbor_ptr[v + 1] += neighbor_ptr[v];
+            let start = neighbors.len();
+            neighbors.extend_from_slice(&out_to[bucket(v as u32)]);
+            if let Some(p) = boundary_prev[v] {
+                neighbors.push(p);
+            }
+            neighbors[start..].sort_unstable();
+            neighbor_ptr.push(neighbors.len());
         }
-        let neighbors: Vec<u32> = pairs.iter().map(|&(_, b)| b).collect();
         // Manifold vertices: around each vertex, faces form a single fan. Walk the fan via
-        // "next face around v" (face containing directed edge (w, v) for the edge (v, w)) and
-        // compare its size with the number of incident faces.
-        let mut incident = vec![0usize; n];
-        for t in &self.triangles {
-            for &i in t {
-                incident[i as usize] += 1;
-            }
-        }
-        // For the walk: map directed edge (a, b) -> the third vertex of its face.
-        let mut third: Vec<((u32, u32), u32)> = Vec::with_capacity(directed.len());
-        for t in &self.triangles {
-            for k in 0..3 {
-                third.push(((t[k], t[(k + 1) % 3]), t[(k + 2) % 3]));
-            }
-        }
-        third.sort_unstable_by_key(|e| e.0);
+        // "next face around v" and compare its size with the number of incident faces.
         let opposite = |a: u32, b: u32| -> Option<u32> {
-            third
-                .binary_search_by_key(&(a, b), |e| e.0)
-                .ok()
-                .map(|k| third[k].1)
+            let r = bucket(a);
+            out_to[r.clone()]
+                .iter()
+                .position(|&x| x == b)
+                .map(|k| out_third[r.start + k])
         };
         for v in 0..n as u32 {
+            let incident = out_ptr[v as usize + 1] - out_ptr[v as usize];
             // Start from the boundary edge leaving v if any (so the walk covers the whole open
             // fan), else from any neighbour.
             let start = match boundary_next[v as usize] {
                 Some(w) => w,
-                None => neighbors[neighbor_ptr[v as usize]],
+                None => out_to[out_ptr[v as usize]],
             };
             let mut w = start;
             let mut count = 0usize;
@@ -188,11 +197,11 @@ impl ChartMesh {
             while let Some(x) = opposite(v, w) {
                 count += 1;
                 w = x;
-                if w == start || count > incident[v as usize] {
+                if w == start || count > incident {
                     break;
                 }
             }
-            if count != incident[v as usize] {
+            if count != incident {
                 return Err(ParameterizeError::NonManifoldVertex { vertex: v });
             }
         }

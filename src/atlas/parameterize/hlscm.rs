@@ -55,7 +55,7 @@ pub struct HlscmOptions {
     /// Finest-level stopping rule, part 2 (whichever comes first): stop when the conformal
     /// energy decreased by at most `final_energy_tolerance · C(x)` over the last
     /// `energy_window` iterations. CG decreases `C` monotonically, so this detects that the
-    /// remaining error no longer moves the energy. Default 1e-7.
+    /// remaining error no longer moves the energy. Default 1e-6.
     pub final_energy_tolerance: f64,
     /// Window (iterations) of the energy rule. Default 5.
     pub energy_window: usize,
@@ -86,7 +86,7 @@ impl Default for HlscmOptions {
             coarsest_max_vertices: 20_000,
             relax_iterations: 5,
             final_tolerance: 1e-9,
-            final_energy_tolerance: 1e-7,
+            final_energy_tolerance: 1e-6,
             energy_window: 5,
             final_max_iterations: 500,
             max_angular_defect_rad: 70f64.to_radians(),
@@ -245,6 +245,9 @@ fn map_pins(pins: &[Pin], mesh: &LevelMesh) -> Vec<Pin> {
         .collect()
 }
 
+/// Most coarse vertices one fine vertex interpolates from in the multilevel preconditioner.
+const MAX_INTERPOLATION_TERMS: usize = 6;
+
 /// The vertex-split interpolation as a matrix from the coarse level's free unknowns to the
 /// fine level's free unknowns: a coarse vertex keeps its value; a re-inserted vertex gets the
 /// barycentric combination of its recorded triangle, expanded recursively down to coarse
@@ -283,6 +286,18 @@ fn prolongation_matrix(
                 Some(last) if last.0 == v => last.1 += a,
                 _ => row.push((v, a)),
             }
+        }
+        // Recursive expansion grows along split chains; keep the MAX_INTERPOLATION_TERMS
+        // largest weights and renormalize to sum 1 (so constants are still interpolated
+        // exactly). This only changes the preconditioner, never the solution it converges to.
+        if row.len() > MAX_INTERPOLATION_TERMS {
+            row.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+            row.truncate(MAX_INTERPOLATION_TERMS);
+            let total: f64 = row.iter().map(|e| e.1).sum();
+            if total > 0.0 {
+                row.iter_mut().for_each(|e| e.1 /= total);
+            }
+            row.sort_by_key(|e| e.0);
         }
         if let Some(slot) = expansion.get_mut(c.removed as usize) {
             *slot = row;

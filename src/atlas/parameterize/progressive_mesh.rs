@@ -109,8 +109,13 @@ pub fn build_progressive_mesh(
     let mut d = Decimator::new(chart, locked, options)?;
     let mut heap = BinaryHeap::new();
     let n = chart.positions_m.len();
+    // Last known priority per vertex: touched vertices are re-queued with it and only
+    // re-evaluated when popped (most are touched several times before their turn, so this
+    // saves most evaluations; a vertex whose priority rose is re-queued at pop time).
+    let mut last_priority = vec![0.0f64; n];
     for u in 0..n as u32 {
         if let Some((priority, _)) = d.best_collapse(u) {
+            last_priority[u as usize] = priority;
             heap.push(Candidate {
                 priority,
                 vertex: u,
@@ -127,10 +132,14 @@ pub fn build_progressive_mesh(
         if !d.alive[u] || d.stamp[u] != c.stamp {
             continue;
         }
-        // Lazy re-evaluation: the target's neighbourhood may have changed since the push.
+        // Lazy re-evaluation: the neighbourhood may have changed since the push.
         let Some((priority, v)) = d.best_collapse(c.vertex) else {
+            // No valid collapse now; if a later collapse nearby touches u, it comes back with
+            // the current frontier priority.
+            last_priority[u] = c.priority;
             continue;
         };
+        last_priority[u] = priority;
         if priority > c.priority {
             d.stamp[u] = d.stamp[u].wrapping_add(1);
             heap.push(Candidate {
@@ -143,20 +152,21 @@ pub fn build_progressive_mesh(
         let record = d.collapse(c.vertex, v, priority);
         collapses.push(record);
         alive -= 1;
-        // Re-evaluate v and its new ring.
+        // Re-queue v and its new ring (their faces changed) for lazy re-evaluation.
         touched.clear();
         touched.push(v);
         d.ring(v, &mut touched);
         for &w in &touched {
             let w = w as usize;
-            d.stamp[w] = d.stamp[w].wrapping_add(1);
-            if let Some((priority, _)) = d.best_collapse(w as u32) {
-                heap.push(Candidate {
-                    priority,
-                    vertex: w as u32,
-                    stamp: d.stamp[w],
-                });
+            if d.locked[w] {
+                continue;
             }
+            d.stamp[w] = d.stamp[w].wrapping_add(1);
+            heap.push(Candidate {
+                priority: last_priority[w],
+                vertex: w as u32,
+                stamp: d.stamp[w],
+            });
         }
     }
     Ok(ProgressiveMesh {
@@ -290,6 +300,7 @@ struct Decimator<'a> {
     boundary_vertices: usize,
     max_defect_rad: f64,
     ring_u: Vec<u32>,
+    ring_counts: Vec<(u32, usize)>,
     /// Candidate buffer of `best_collapse`: (priority, target, faces on the edge).
     candidates: Vec<(f64, u32, usize)>,
     /// Link-condition marks: `in_ring_u[w] == ring_epoch` iff `w` is in the current `u`'s ring;
@@ -333,6 +344,7 @@ impl<'a> Decimator<'a> {
             boundary_vertices: 0,
             max_defect_rad: options.max_angular_defect_rad,
             ring_u: Vec::new(),
+            ring_counts: Vec::new(),
             candidates: Vec::new(),
             in_ring_u: vec![0; n],
             ring_epoch: 0,
@@ -371,11 +383,25 @@ impl<'a> Decimator<'a> {
         out.truncate(write);
     }
 
-    fn faces_on_edge(&self, u: u32, v: u32) -> usize {
-        self.vertex_faces[u as usize]
-            .iter()
-            .filter(|&&f| self.faces[f as usize].contains(&v))
-            .count()
+    /// The 1-ring of `u` with, for each neighbour `w`, the number of faces on edge `u–w`
+    /// (1 on the boundary, 2 inside), sorted by `w`. Replaces `out`'s content.
+    fn ring_with_counts(&self, u: u32, scratch: &mut Vec<u32>, out: &mut Vec<(u32, usize)>) {
+        scratch.clear();
+        for &f in &self.vertex_faces[u as usize] {
+            for &w in &self.faces[f as usize] {
+                if w != u {
+                    scratch.push(w);
+                }
+            }
+        }
+        scratch.sort_unstable();
+        out.clear();
+        for &w in scratch.iter() {
+            match out.last_mut() {
+                Some(last) if last.0 == w => last.1 += 1,
+                _ => out.push((w, 1)),
+            }
+        }
     }
 
     /// The cheapest valid collapse `u → v` and its priority, or `None`.
@@ -384,10 +410,16 @@ impl<'a> Decimator<'a> {
         if !self.alive[ui] || self.locked[ui] || self.vertex_faces[ui].is_empty() {
             return None;
         }
-        let mut ring_u = std::mem::take(&mut self.ring_u);
-        ring_u.clear();
-        self.ring(u, &mut ring_u);
+        let mut scratch = std::mem::take(&mut self.ring_u);
+        let mut ring_u = std::mem::take(&mut self.ring_counts);
+        self.ring_with_counts(u, &mut scratch, &mut ring_u);
+        self.ring_u = scratch;
         let boundary_u = ring_u.len() != self.vertex_faces[ui].len();
+        // The other boundary neighbour, for the boundary area term (first with one face).
+        let boundary_neighbors: [Option<u32>; 2] = {
+            let mut it = ring_u.iter().filter(|e| e.1 == 1).map(|e| e.0);
+            [it.next(), it.next()]
+        };
         let pu = self.pos[ui];
         // Angular defect of u.
         let mut angle_sum = 0.0;
@@ -404,28 +436,48 @@ impl<'a> Decimator<'a> {
         let mut candidates = std::mem::take(&mut self.candidates);
         candidates.clear();
         if defect.abs() <= self.max_defect_rad && (!boundary_u || self.boundary_vertices > 4) {
-            for &v in &ring_u {
-                let on_edge = self.faces_on_edge(u, v);
+            for &(v, on_edge) in &ring_u {
                 if boundary_u && on_edge != 1 {
                     continue; // a boundary vertex only slides along the boundary
                 }
-                let Some(loss) = self.collapse_loss(u, v, boundary_u, &ring_u) else {
+                let other_boundary = if boundary_u {
+                    match boundary_neighbors {
+                        [Some(a), Some(b)] => Some(if a == v { b } else { a }),
+                        _ => continue,
+                    }
+                } else {
+                    None
+                };
+                let Some(loss) = self.collapse_loss(u, v, other_boundary) else {
                     continue;
                 };
                 candidates.push((loss + self.accumulated_m[ui], v, on_edge));
             }
         }
-        candidates.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let mut best = None;
         if !candidates.is_empty() {
-            self.ring_epoch = self.ring_epoch.wrapping_add(1);
-            for &w in &ring_u {
+            if self.ring_epoch == u32::MAX {
+                self.in_ring_u.iter_mut().for_each(|m| *m = 0);
+                self.ring_epoch = 0;
+            }
+            self.ring_epoch += 1;
+            for &(w, _) in &ring_u {
                 self.in_ring_u[w as usize] = self.ring_epoch;
             }
-            for &(priority, v, on_edge) in &candidates {
+            // Cheapest first (ties: smaller vertex), removing each candidate once tried.
+            while let Some(k) = (0..candidates.len()).min_by(|&a, &b| {
+                let (ca, cb) = (&candidates[a], &candidates[b]);
+                ca.0.total_cmp(&cb.0).then(ca.1.cmp(&cb.1))
+            }) {
+                let (priority, v, on_edge) = candidates.swap_remove(k);
                 // Link condition: the common neighbours of u and v are exactly the opposite
                 // vertices of the faces on the edge, otherwise the mesh becomes non-manifold.
-                self.seen_epoch = self.seen_epoch.wrapping_add(1);
+                if self.seen_epoch == u32::MAX {
+                    // About to wrap: old marks could alias new epochs; clear them.
+                    self.seen.iter_mut().for_each(|m| *m = 0);
+                    self.seen_epoch = 0;
+                }
+                self.seen_epoch += 1;
                 let mut common = 0usize;
                 for &f in &self.vertex_faces[v as usize] {
                     for &w in &self.faces[f as usize] {
@@ -446,13 +498,13 @@ impl<'a> Decimator<'a> {
             }
         }
         self.candidates = candidates;
-        self.ring_u = ring_u;
+        self.ring_counts = ring_u;
         best
     }
 
     /// Geometric loss of `u → v` (volume and boundary-area terms, as lengths), or `None` if a
     /// surviving face would flip or degenerate.
-    fn collapse_loss(&self, u: u32, v: u32, boundary_u: bool, ring_u: &[u32]) -> Option<f64> {
+    fn collapse_loss(&self, u: u32, v: u32, other_boundary: Option<u32>) -> Option<f64> {
         let pu = self.pos[u as usize];
         let pv = self.pos[v as usize];
         let uv = sub(pv, pu);
@@ -479,12 +531,8 @@ impl<'a> Decimator<'a> {
             volume += dot3(n_old, uv).abs() / 6.0;
         }
         let mut area = 0.0;
-        if boundary_u {
+        if let Some(w) = other_boundary {
             // The other boundary neighbour w of u: old border w–u–v becomes w–v.
-            let w = ring_u
-                .iter()
-                .copied()
-                .find(|&w| w != v && self.faces_on_edge(u, w) == 1)?;
             let pw = self.pos[w as usize];
             area = 0.5 * norm3(cross(sub(pu, pw), sub(pv, pw)));
         }
