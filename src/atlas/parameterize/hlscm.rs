@@ -45,7 +45,7 @@ pub struct HlscmOptions {
     /// Vertex-count ratio between consecutive levels. Default 10 (hlscm-2003 §4.1).
     pub level_ratio: f64,
     /// The coarsest level has at most this many vertices (fewer if the ratio lands below) and is
-    /// solved directly. Default 20_000.
+    /// solved directly. Default 60_000.
     pub coarsest_max_vertices: usize,
     /// CG iterations on each intermediate level. Default 5.
     pub relax_iterations: usize,
@@ -83,7 +83,7 @@ impl Default for HlscmOptions {
     fn default() -> Self {
         Self {
             level_ratio: 10.0,
-            coarsest_max_vertices: 20_000,
+            coarsest_max_vertices: 60_000,
             relax_iterations: 5,
             final_tolerance: 1e-9,
             final_energy_tolerance: 1e-6,

@@ -154,7 +154,7 @@ pub enum ParameterizeMethod {
 pub struct ParameterizeOptions {
     /// Solver choice. Default [`ParameterizeMethod::Auto`].
     pub method: ParameterizeMethod,
-    /// With `Auto`, charts with at least this many vertices use HLSCM. Default 150_000, from the
+    /// With `Auto`, charts with at least this many vertices use HLSCM. Default 250_000, from the
     /// crossover measured by `texatlas bench parameterize` (see `hlscm` module doc).
     pub auto_hierarchical_min_vertices: usize,
     /// HLSCM tuning.
@@ -168,7 +168,7 @@ impl Default for ParameterizeOptions {
     fn default() -> Self {
         Self {
             method: ParameterizeMethod::Auto,
-            auto_hierarchical_min_vertices: 150_000,
+            auto_hierarchical_min_vertices: 250_000,
             hlscm: HlscmOptions::default(),
             cg: CgOptions {
                 tolerance: 1e-10,
