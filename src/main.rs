@@ -6,7 +6,11 @@ use clap::{Parser, Subcommand};
 mod cli;
 
 #[derive(Debug, Parser)]
-#[command(name = "texatlas", version, about = "Texture atlases for glTF 2.0 assets")]
+#[command(
+    name = "texatlas",
+    version,
+    about = "Texture atlases for glTF 2.0 assets"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

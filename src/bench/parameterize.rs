@@ -99,7 +99,13 @@ pub fn height_field(triangles: usize) -> ChartMesh {
     let mut octaves = Vec::new();
     for k in 0..5 {
         let f = 2.0 * std::f64::consts::PI * (1u32 << k) as f64;
-        octaves.push((0.06 / (1u32 << k) as f64, f * (0.8 + 0.4 * next()), f * (0.8 + 0.4 * next()), 6.3 * next(), 6.3 * next()));
+        octaves.push((
+            0.06 / (1u32 << k) as f64,
+            f * (0.8 + 0.4 * next()),
+            f * (0.8 + 0.4 * next()),
+            6.3 * next(),
+            6.3 * next(),
+        ));
     }
     let mut bumps = Vec::new();
     for _ in 0..12 {
@@ -145,7 +151,8 @@ pub fn height_field(triangles: usize) -> ChartMesh {
 
 /// Writes a chart as raw little-endian data (`u64` counts, `f64` positions, `u32` indices).
 pub fn write_chart(path: &Path, chart: &ChartMesh) -> anyhow::Result<()> {
-    let mut bytes = Vec::with_capacity(16 + chart.positions_m.len() * 24 + chart.triangles.len() * 12);
+    let mut bytes =
+        Vec::with_capacity(16 + chart.positions_m.len() * 24 + chart.triangles.len() * 12);
     bytes.extend_from_slice(&(chart.positions_m.len() as u64).to_le_bytes());
     bytes.extend_from_slice(&(chart.triangles.len() as u64).to_le_bytes());
     for p in &chart.positions_m {
@@ -158,7 +165,8 @@ pub fn write_chart(path: &Path, chart: &ChartMesh) -> anyhow::Result<()> {
             bytes.extend_from_slice(&i.to_le_bytes());
         }
     }
-    let mut f = std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+    let mut f =
+        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
     f.write_all(&bytes)?;
     Ok(())
 }
@@ -181,7 +189,11 @@ pub fn read_chart(path: &Path) -> anyhow::Result<ChartMesh> {
         .and_then(|s| s.checked_add(16))
         .context("chart file sizes overflow")?;
     if expected != bytes.len() {
-        bail!("chart file {} has {} bytes, header says {expected}", path.display(), bytes.len());
+        bail!(
+            "chart file {} has {} bytes, header says {expected}",
+            path.display(),
+            bytes.len()
+        );
     }
     let mut positions_m = Vec::with_capacity(n);
     let mut o = 16;
@@ -258,7 +270,11 @@ pub fn run_method(
                 ("hierarchy".to_string(), (t1 - t0).as_secs_f64()),
                 ("cascadic solve".to_string(), (t2 - t1).as_secs_f64()),
             ];
-            let levels = report.levels.iter().map(|l| (l.vertices, l.iterations)).collect();
+            let levels = report
+                .levels
+                .iter()
+                .map(|l| (l.vertices, l.iterations))
+                .collect();
             (uv, report.finest_iterations, report.converged, levels)
         }
         BenchMethod::LscmCg => {
@@ -284,7 +300,12 @@ pub fn run_method(
                 }
                 ControlFlow::Continue(())
             })?;
-            (system.uv_from_solution(&x), outcome.iterations, reached, Vec::new())
+            (
+                system.uv_from_solution(&x),
+                outcome.iterations,
+                reached,
+                Vec::new(),
+            )
         }
     };
     let seconds = start.elapsed().as_secs_f64();
@@ -316,8 +337,10 @@ pub fn run_bench(
 ) -> anyhow::Result<Vec<BenchRow>> {
     let mut rows = Vec::new();
     for (label, chart) in charts {
-        let path: PathBuf =
-            std::env::temp_dir().join(format!("texatlas-bench-{}-{label}.chart", std::process::id()));
+        let path: PathBuf = std::env::temp_dir().join(format!(
+            "texatlas-bench-{}-{label}.chart",
+            std::process::id()
+        ));
         write_chart(&path, chart)?;
         let mut reference: Option<f64> = None;
         let mut ordered: Vec<BenchMethod> = methods.to_vec();
@@ -330,10 +353,15 @@ pub fn run_bench(
             let mut cmd = std::process::Command::new(exe);
             cmd.args(["bench", "parameterize-child", "--chart-file"])
                 .arg(&path)
-                .args(["--label", label, "--method", clap::ValueEnum::to_possible_value(&method)
-                    .map(|v| v.get_name().to_string())
-                    .unwrap_or_default()
-                    .as_str()])
+                .args([
+                    "--label",
+                    label,
+                    "--method",
+                    clap::ValueEnum::to_possible_value(&method)
+                        .map(|v| v.get_name().to_string())
+                        .unwrap_or_default()
+                        .as_str(),
+                ])
                 .args(["--cg-timeout-s", &cg_timeout_s.to_string()]);
             if let Some(e) = reference {
                 cmd.args(["--reference-energy", &format!("{e:e}")]);
@@ -347,8 +375,8 @@ pub fn run_bench(
                     String::from_utf8_lossy(&out.stderr)
                 );
             }
-            let row: BenchRow = serde_json::from_slice(&out.stdout)
-                .context("parsing the bench child's JSON")?;
+            let row: BenchRow =
+                serde_json::from_slice(&out.stdout).context("parsing the bench child's JSON")?;
             if method == BenchMethod::LscmDirect {
                 reference = Some(row.energy);
             }
@@ -364,7 +392,16 @@ pub fn run_bench(
 pub fn format_table(rows: &[BenchRow]) -> String {
     let mut s = format!(
         "{:<22} {:>9} {:<12} {:>9} {:>9} {:>7} {:>14} {:>10} {:>5} {:>5}  levels(vertices:iters)\n",
-        "chart", "triangles", "method", "seconds", "peak_MiB", "iters", "energy", "rel_err", "conv", "flips"
+        "chart",
+        "triangles",
+        "method",
+        "seconds",
+        "peak_MiB",
+        "iters",
+        "energy",
+        "rel_err",
+        "conv",
+        "flips"
     );
     for r in rows {
         let levels: Vec<String> = r.levels.iter().map(|(v, i)| format!("{v}:{i}")).collect();
@@ -377,7 +414,9 @@ pub fn format_table(rows: &[BenchRow]) -> String {
             r.peak_mib,
             r.iterations,
             r.energy,
-            r.energy_rel_to_direct.map(|e| format!("{e:.2e}")).unwrap_or_else(|| "-".into()),
+            r.energy_rel_to_direct
+                .map(|e| format!("{e:.2e}"))
+                .unwrap_or_else(|| "-".into()),
             r.converged,
             r.flipped_faces,
             levels.join(" ")
@@ -422,7 +461,8 @@ mod tests {
     fn run_method_in_process_reports_consistent_rows() {
         let chart = height_field(2_000);
         let direct = run_method("t", &chart, BenchMethod::LscmDirect, None, 10.0).expect("direct");
-        let cg = run_method("t", &chart, BenchMethod::LscmCg, Some(direct.energy), 30.0).expect("cg");
+        let cg =
+            run_method("t", &chart, BenchMethod::LscmCg, Some(direct.energy), 30.0).expect("cg");
         assert!(cg.converged, "{cg:?}");
         assert!(cg.energy <= direct.energy * (1.0 + 1e-4) + 1e-15);
         assert!(cg.iterations > 0 && direct.flipped_faces == 0);

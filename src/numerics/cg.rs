@@ -83,7 +83,13 @@ impl Jacobi {
             inv_diag: a
                 .diagonal()
                 .into_iter()
-                .map(|d| if d > 0.0 && d.is_finite() { 1.0 / d } else { 1.0 })
+                .map(|d| {
+                    if d > 0.0 && d.is_finite() {
+                        1.0 / d
+                    } else {
+                        1.0
+                    }
+                })
                 .collect(),
         }
     }
@@ -157,7 +163,7 @@ pub fn solve_pcg(
     while rel > options.tolerance && iterations < options.max_iterations {
         a.mul_vec_into(&p, &mut ap)?;
         let pap = dot(&p, &ap);
-        if !(pap > 0.0) {
+        if pap.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             // Breakdown: A is not positive definite along p (or p = 0). Stop honestly.
             break;
         }
@@ -203,10 +209,22 @@ mod tests {
     fn laplacian(n: usize) -> CsrMatrix {
         let mut t = Vec::new();
         for i in 0..n {
-            t.push(Triplet { row: i as u32, col: i as u32, value: 2.01 });
+            t.push(Triplet {
+                row: i as u32,
+                col: i as u32,
+                value: 2.01,
+            });
             if i + 1 < n {
-                t.push(Triplet { row: i as u32, col: i as u32 + 1, value: -1.0 });
-                t.push(Triplet { row: i as u32 + 1, col: i as u32, value: -1.0 });
+                t.push(Triplet {
+                    row: i as u32,
+                    col: i as u32 + 1,
+                    value: -1.0,
+                });
+                t.push(Triplet {
+                    row: i as u32 + 1,
+                    col: i as u32,
+                    value: -1.0,
+                });
             }
         }
         CsrMatrix::from_triplets(n, n, &t).expect("valid")
@@ -217,12 +235,20 @@ mod tests {
         let a = laplacian(200);
         let b: Vec<f64> = (0..200).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
         let mut x = vec![0.0; 200];
-        let opts = CgOptions { tolerance: 1e-10, max_iterations: 1000 };
+        let opts = CgOptions {
+            tolerance: 1e-10,
+            max_iterations: 1000,
+        };
         let out = solve_cg(&a, &b, &mut x, &opts, &mut |_| ControlFlow::Continue(())).expect("ok");
         assert!(out.converged);
         // Recompute the TRUE residual independently of CG's recursive one.
         let ax = a.mul_vec(&x).expect("shape");
-        let res: f64 = ax.iter().zip(&b).map(|(p, q)| (p - q) * (p - q)).sum::<f64>().sqrt();
+        let res: f64 = ax
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (p - q) * (p - q))
+            .sum::<f64>()
+            .sqrt();
         let bn: f64 = b.iter().map(|v| v * v).sum::<f64>().sqrt();
         assert!(res <= 1e-9 * bn, "true relative residual {}", res / bn);
     }
@@ -232,14 +258,24 @@ mod tests {
         let a = laplacian(500);
         let b = vec![1.0; 500];
         let mut x = vec![0.0; 500];
-        let opts = CgOptions { tolerance: 1e-14, max_iterations: 7 };
+        let opts = CgOptions {
+            tolerance: 1e-14,
+            max_iterations: 7,
+        };
         let out = solve_cg(&a, &b, &mut x, &opts, &mut |_| ControlFlow::Continue(())).expect("ok");
         assert_eq!(out.iterations, 7);
         assert!(!out.converged);
         let mut x = vec![0.0; 500];
-        let opts = CgOptions { tolerance: 1e-14, max_iterations: 100 };
+        let opts = CgOptions {
+            tolerance: 1e-14,
+            max_iterations: 100,
+        };
         let out = solve_cg(&a, &b, &mut x, &opts, &mut |s| {
-            if s.iteration >= 3 { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+            if s.iteration >= 3 {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
         })
         .expect("ok");
         assert_eq!(out.iterations, 3);
@@ -249,11 +285,18 @@ mod tests {
     fn cg_zero_rhs_and_bad_shapes() {
         let a = laplacian(4);
         let mut x = vec![1.0; 4];
-        let out = solve_cg(&a, &[0.0; 4], &mut x, &CgOptions::default(), &mut |_| ControlFlow::Continue(()))
-            .expect("ok");
+        let out = solve_cg(&a, &[0.0; 4], &mut x, &CgOptions::default(), &mut |_| {
+            ControlFlow::Continue(())
+        })
+        .expect("ok");
         assert_eq!(x, vec![0.0; 4]);
         assert_eq!(out.iterations, 0);
         let mut x = vec![0.0; 3];
-        assert!(solve_cg(&a, &[1.0; 4], &mut x, &CgOptions::default(), &mut |_| ControlFlow::Continue(())).is_err());
+        assert!(
+            solve_cg(&a, &[1.0; 4], &mut x, &CgOptions::default(), &mut |_| {
+                ControlFlow::Continue(())
+            })
+            .is_err()
+        );
     }
 }

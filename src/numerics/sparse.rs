@@ -166,7 +166,10 @@ impl CsrMatrix {
                     });
                 }
                 if !values[k].is_finite() {
-                    return Err(SparseError::NonFinite { row: r as u32, col: c });
+                    return Err(SparseError::NonFinite {
+                        row: r as u32,
+                        col: c,
+                    });
                 }
             }
         }
@@ -347,7 +350,9 @@ mod tests {
             .expect("valid");
         assert_eq!(a.mul_vec(&[1.0, 10.0]).expect("shape"), vec![20.0, 43.0]);
         // unsorted columns in row 1
-        assert!(CsrMatrix::from_csr_parts(2, 2, vec![0, 1, 3], vec![1, 1, 0], vec![1.0; 3]).is_err());
+        assert!(
+            CsrMatrix::from_csr_parts(2, 2, vec![0, 1, 3], vec![1, 1, 0], vec![1.0; 3]).is_err()
+        );
         // column out of range
         assert!(CsrMatrix::from_csr_parts(2, 2, vec![0, 1, 2], vec![1, 2], vec![1.0; 2]).is_err());
         // bad row_ptr length
@@ -372,10 +377,20 @@ mod tests {
 
     #[test]
     fn dot_is_independent_of_thread_count() {
-        let a: Vec<f64> = (0..100_000u64).map(|i| ((i * 7919) % 1000) as f64 * 1e-3 - 0.3).collect();
-        let b: Vec<f64> = (0..100_000u64).map(|i| ((i * 104_729) % 997) as f64 * 1e-2).collect();
-        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("pool");
-        let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().expect("pool");
+        let a: Vec<f64> = (0..100_000u64)
+            .map(|i| ((i * 7919) % 1000) as f64 * 1e-3 - 0.3)
+            .collect();
+        let b: Vec<f64> = (0..100_000u64)
+            .map(|i| ((i * 104_729) % 997) as f64 * 1e-2)
+            .collect();
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("pool");
+        let three = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .expect("pool");
         let d1 = one.install(|| dot(&a, &b));
         let d3 = three.install(|| dot(&a, &b));
         assert_eq!(d1.to_bits(), d3.to_bits());

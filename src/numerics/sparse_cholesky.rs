@@ -186,11 +186,23 @@ mod tests {
         let mut t = Vec::new();
         for i in 0..m {
             for j in 0..m {
-                t.push(Triplet { row: id(i, j), col: id(i, j), value: 4.05 });
+                t.push(Triplet {
+                    row: id(i, j),
+                    col: id(i, j),
+                    value: 4.05,
+                });
                 for (di, dj) in [(1usize, 0usize), (0, 1)] {
                     if i + di < m && j + dj < m {
-                        t.push(Triplet { row: id(i, j), col: id(i + di, j + dj), value: -1.0 });
-                        t.push(Triplet { row: id(i + di, j + dj), col: id(i, j), value: -1.0 });
+                        t.push(Triplet {
+                            row: id(i, j),
+                            col: id(i + di, j + dj),
+                            value: -1.0,
+                        });
+                        t.push(Triplet {
+                            row: id(i + di, j + dj),
+                            col: id(i, j),
+                            value: -1.0,
+                        });
                     }
                 }
             }
@@ -201,11 +213,17 @@ mod tests {
     #[test]
     fn solves_grid_system_to_machine_precision() {
         let a = grid(30);
-        let x_true: Vec<f64> = (0..900).map(|i| ((i * 13) % 17) as f64 / 7.0 - 1.0).collect();
+        let x_true: Vec<f64> = (0..900)
+            .map(|i| ((i * 13) % 17) as f64 / 7.0 - 1.0)
+            .collect();
         let b = a.mul_vec(&x_true).expect("shape");
         let f = SparseCholesky::factor(&a).expect("spd");
         let x = f.solve(&b).expect("shape");
-        let err = x.iter().zip(&x_true).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max);
+        let err = x
+            .iter()
+            .zip(&x_true)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0, f64::max);
         assert!(err < 1e-10, "max error {err}");
         assert!(f.factor_nnz() >= a.nnz() / 2);
         assert!(f.solve(&b[1..]).is_err());
@@ -214,10 +232,26 @@ mod tests {
     #[test]
     fn rejects_indefinite_and_non_square() {
         let t = [
-            Triplet { row: 0, col: 0, value: 1.0 },
-            Triplet { row: 0, col: 1, value: 2.0 },
-            Triplet { row: 1, col: 0, value: 2.0 },
-            Triplet { row: 1, col: 1, value: 1.0 },
+            Triplet {
+                row: 0,
+                col: 0,
+                value: 1.0,
+            },
+            Triplet {
+                row: 0,
+                col: 1,
+                value: 2.0,
+            },
+            Triplet {
+                row: 1,
+                col: 0,
+                value: 2.0,
+            },
+            Triplet {
+                row: 1,
+                col: 1,
+                value: 1.0,
+            },
         ];
         let a = CsrMatrix::from_triplets(2, 2, &t).expect("valid");
         assert!(matches!(
@@ -225,7 +259,10 @@ mod tests {
             Err(CholeskyError::NotPositiveDefinite { .. })
         ));
         let r = CsrMatrix::from_triplets(2, 3, &[]).expect("valid");
-        assert!(matches!(SparseCholesky::factor(&r), Err(CholeskyError::NotSquare { .. })));
+        assert!(matches!(
+            SparseCholesky::factor(&r),
+            Err(CholeskyError::NotSquare { .. })
+        ));
     }
 
     #[test]

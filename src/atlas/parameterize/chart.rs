@@ -46,6 +46,12 @@ pub struct ChartTopology {
 /// magnitude and the normal equations (condition number squared) would lose all precision.
 const DEGENERATE_RELATIVE_AREA: f64 = 1e-12;
 
+/// `a > b`, and false when either is NaN: the negation `!exceeds(a, b)` is the NaN-safe
+/// "not strictly greater" test every geometric guard here needs.
+pub(crate) fn exceeds(a: f64, b: f64) -> bool {
+    a > b
+}
+
 pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
@@ -99,7 +105,7 @@ impl ChartMesh {
             let (e0, e1, e2) = (sub(b, a), sub(c, a), sub(c, b));
             let longest2 = dot3(e0, e0).max(dot3(e1, e1)).max(dot3(e2, e2));
             let twice_area = norm3(cross(e0, e1));
-            if !(twice_area > DEGENERATE_RELATIVE_AREA * longest2) {
+            if !exceeds(twice_area, DEGENERATE_RELATIVE_AREA * longest2) {
                 return Err(ParameterizeError::DegenerateTriangle { triangle: f as u32 });
             }
         }
@@ -376,27 +382,48 @@ mod tests {
         let ok = grid(2, 2, |x, y| [x, y, 0.0]);
         assert!(ok.validate().is_ok());
         let empty = ChartMesh::default();
-        assert!(matches!(empty.validate(), Err(ParameterizeError::EmptyChart)));
+        assert!(matches!(
+            empty.validate(),
+            Err(ParameterizeError::EmptyChart)
+        ));
         let mut m = ok.clone();
         m.triangles[0][1] = 99;
-        assert!(matches!(m.validate(), Err(ParameterizeError::IndexOutOfRange { .. })));
+        assert!(matches!(
+            m.validate(),
+            Err(ParameterizeError::IndexOutOfRange { .. })
+        ));
         let mut m = ok.clone();
         m.triangles[0][1] = m.triangles[0][0];
-        assert!(matches!(m.validate(), Err(ParameterizeError::RepeatedVertex { .. })));
+        assert!(matches!(
+            m.validate(),
+            Err(ParameterizeError::RepeatedVertex { .. })
+        ));
         let mut m = ok.clone();
         m.positions_m[0][2] = f64::NAN;
-        assert!(matches!(m.validate(), Err(ParameterizeError::NonFinitePosition { .. })));
+        assert!(matches!(
+            m.validate(),
+            Err(ParameterizeError::NonFinitePosition { .. })
+        ));
         let mut m = ok.clone();
         m.positions_m.push([5.0, 5.0, 5.0]);
-        assert!(matches!(m.validate(), Err(ParameterizeError::UnreferencedVertex { .. })));
+        assert!(matches!(
+            m.validate(),
+            Err(ParameterizeError::UnreferencedVertex { .. })
+        ));
         let mut m = ok.clone();
         m.triangles[0].swap(0, 1);
-        assert!(matches!(m.validate(), Err(ParameterizeError::NonManifoldEdge { .. })));
+        assert!(matches!(
+            m.validate(),
+            Err(ParameterizeError::NonManifoldEdge { .. })
+        ));
         let degenerate = ChartMesh {
             positions_m: vec![[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
             triangles: vec![[0, 1, 2]],
         };
-        assert!(matches!(degenerate.validate(), Err(ParameterizeError::DegenerateTriangle { .. })));
+        assert!(matches!(
+            degenerate.validate(),
+            Err(ParameterizeError::DegenerateTriangle { .. })
+        ));
         // Two triangles touching at one vertex: a bow-tie.
         let bowtie = ChartMesh {
             positions_m: vec![
@@ -408,7 +435,10 @@ mod tests {
             ],
             triangles: vec![[0, 1, 2], [0, 3, 4]],
         };
-        assert!(matches!(bowtie.validate(), Err(ParameterizeError::NonManifoldVertex { .. })));
+        assert!(matches!(
+            bowtie.validate(),
+            Err(ParameterizeError::NonManifoldVertex { .. })
+        ));
         // Two separate triangles.
         let two = ChartMesh {
             positions_m: vec![
@@ -421,18 +451,30 @@ mod tests {
             ],
             triangles: vec![[0, 1, 2], [3, 4, 5]],
         };
-        assert!(matches!(two.validate(), Err(ParameterizeError::Disconnected { .. })));
+        assert!(matches!(
+            two.validate(),
+            Err(ParameterizeError::Disconnected { .. })
+        ));
         // A closed tetrahedron: no boundary.
         let tet = ChartMesh {
             positions_m: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]],
         };
-        assert!(matches!(tet.validate(), Err(ParameterizeError::NotADisk { boundary_loops: 0, .. })));
+        assert!(matches!(
+            tet.validate(),
+            Err(ParameterizeError::NotADisk {
+                boundary_loops: 0,
+                ..
+            })
+        ));
         // An annulus (cylinder without caps): two boundary loops.
         let annulus = super::super::test_meshes::open_cylinder(8, 2, false);
         assert!(matches!(
             annulus.validate(),
-            Err(ParameterizeError::NotADisk { boundary_loops: 2, .. })
+            Err(ParameterizeError::NotADisk {
+                boundary_loops: 2,
+                ..
+            })
         ));
     }
 }

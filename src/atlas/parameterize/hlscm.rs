@@ -221,9 +221,11 @@ pub fn build_hierarchy(
         Some(level) => {
             SparseCholesky::factor(level.system.matrix()).map_err(ParameterizeError::Direct)?
         }
-        None => return Err(ParameterizeError::Internal {
-            detail: "HLSCM hierarchy has no level".to_string(),
-        }),
+        None => {
+            return Err(ParameterizeError::Internal {
+                detail: "HLSCM hierarchy has no level".to_string(),
+            })
+        }
     };
     Ok(HlscmHierarchy {
         pm,
@@ -541,9 +543,10 @@ mod tests {
                 coarsest_max_vertices: 300,
                 ..HlscmOptions::default()
             };
-            let (uv, report) =
-                solve_hlscm(&chart, &topo, &pins, &options, &mut |_| ControlFlow::Continue(()))
-                    .expect("hlscm");
+            let (uv, report) = solve_hlscm(&chart, &topo, &pins, &options, &mut |_| {
+                ControlFlow::Continue(())
+            })
+            .expect("hlscm");
             assert!(report.levels.len() >= 2, "{report:?}");
             assert!(report.converged, "{report:?}");
             let e = conformal_energy(&chart, &uv);
@@ -561,13 +564,9 @@ mod tests {
         let chart = noisy_height_field(8, 0.3, 4);
         let topo = chart.validate().expect("disk");
         let pins = diameter_pins(&chart, &topo);
-        let (uv, report) = solve_hlscm(
-            &chart,
-            &topo,
-            &pins,
-            &HlscmOptions::default(),
-            &mut |_| ControlFlow::Continue(()),
-        )
+        let (uv, report) = solve_hlscm(&chart, &topo, &pins, &HlscmOptions::default(), &mut |_| {
+            ControlFlow::Continue(())
+        })
         .expect("hlscm");
         assert_eq!(report.levels.len(), 1);
         let e = conformal_energy(&chart, &uv);

@@ -35,7 +35,7 @@ use std::ops::ControlFlow;
 use crate::numerics::cg::CgStep;
 use crate::numerics::{solve_cg, CgOptions, CgOutcome, CsrMatrix, SparseCholesky};
 
-use super::chart::{cross, dot3, norm3, sub, ChartMesh, ChartTopology};
+use super::chart::{cross, dot3, exceeds, norm3, sub, ChartMesh, ChartTopology};
 use super::ParameterizeError;
 
 /// Coordinates `(x_k, y_k)` of the triangle's vertices in its local orthonormal basis
@@ -189,11 +189,12 @@ impl LscmSystem {
                             for (dr, (c_u, c_v)) in [(re, -im), (im, re)].into_iter().enumerate() {
                                 let row = r0 + dr;
                                 let (lo, hi) = (row_ptr[row], row_ptr[row + 1]);
-                                let pos = col_idx[lo..hi]
-                                    .binary_search(&(2 * kb))
-                                    .map_err(|_| ParameterizeError::Internal {
-                                        detail: "LSCM sparsity pattern misses a triangle edge"
-                                            .to_string(),
+                                let pos =
+                                    col_idx[lo..hi].binary_search(&(2 * kb)).map_err(|_| {
+                                        ParameterizeError::Internal {
+                                            detail: "LSCM sparsity pattern misses a triangle edge"
+                                                .to_string(),
+                                        }
                                     })?;
                                 values[lo + pos] += c_u;
                                 values[lo + pos + 1] += c_v;
@@ -340,10 +341,7 @@ pub fn diameter_pins(chart: &ChartMesh, topology: &ChartTopology) -> [Pin; 2] {
 pub fn conformal_energy(chart: &ChartMesh, uv: &[[f64; 2]]) -> f64 {
     let mut total = 0.0;
     for t in &chart.triangles {
-        let (Some(p), Some(q)) = (
-            fetch3(&chart.positions_m, t),
-            fetch3(uv, t),
-        ) else {
+        let (Some(p), Some(q)) = (fetch3(&chart.positions_m, t), fetch3(uv, t)) else {
             continue;
         };
         let [[x1, y1], [x2, y2], [x3, y3]] = local_frame_coordinates(p);
@@ -375,7 +373,7 @@ pub fn flipped_faces(chart: &ChartMesh, uv: &[[f64; 2]]) -> Vec<u32> {
             let q = fetch3(uv, t)?;
             let area2 = (q[1][0] - q[0][0]) * (q[2][1] - q[0][1])
                 - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1]);
-            (!(area2 > 0.0)).then_some(f as u32)
+            (!exceeds(area2, 0.0)).then_some(f as u32)
         })
         .collect()
 }
@@ -464,7 +462,10 @@ mod tests {
             let (_, uv, e) = solve(&chart);
             let c_grad = conformal_energy(&chart, &uv);
             let c_cot = cotan_energy(&chart, &uv);
-            assert!(e > 1e-6, "non-developable surfaces have positive energy, got {e}");
+            assert!(
+                e > 1e-6,
+                "non-developable surfaces have positive energy, got {e}"
+            );
             assert!((e - c_grad).abs() <= 1e-9 * e, "{e} vs {c_grad}");
             assert!((e - c_cot).abs() <= 1e-9 * e, "{e} vs {c_cot}");
         }
@@ -524,7 +525,10 @@ mod tests {
         let ftopo = fine.validate().expect("disk");
         let sys = LscmSystem::assemble(&fine, &ftopo, &pins).expect("assemble");
         let uv1 = sys.uv_from_solution(&sys.solve_direct().expect("solve"));
-        let scale = uv0.iter().map(|p| p[0].abs().max(p[1].abs())).fold(0.0, f64::max);
+        let scale = uv0
+            .iter()
+            .map(|p| p[0].abs().max(p[1].abs()))
+            .fold(0.0, f64::max);
         for (a, b) in uv0.iter().zip(&uv1) {
             assert!((a[0] - b[0]).abs() <= 1e-9 * scale && (a[1] - b[1]).abs() <= 1e-9 * scale);
         }
@@ -540,8 +544,13 @@ mod tests {
         let chart = hemisphere(12, 5);
         let (sys, uv, e) = solve(&chart);
         let mut x = vec![0.0; sys.unknowns()];
-        let opts = CgOptions { tolerance: 1e-12, max_iterations: 20_000 };
-        let out = sys.solve_cg(&mut x, &opts, &mut |_| ControlFlow::Continue(())).expect("cg");
+        let opts = CgOptions {
+            tolerance: 1e-12,
+            max_iterations: 20_000,
+        };
+        let out = sys
+            .solve_cg(&mut x, &opts, &mut |_| ControlFlow::Continue(()))
+            .expect("cg");
         assert!(out.converged);
         let e_cg = sys.energy(&x).expect("energy");
         let r: Vec<f64> = {
@@ -560,14 +569,35 @@ mod tests {
     fn bad_pins_are_typed_errors() {
         let chart = grid(2, 2, |x, y| [x, y, 0.0]);
         let topo = chart.validate().expect("disk");
-        let one = [Pin { vertex: 0, uv: [0.0, 0.0] }];
+        let one = [Pin {
+            vertex: 0,
+            uv: [0.0, 0.0],
+        }];
         assert!(matches!(
             LscmSystem::assemble(&chart, &topo, &one),
             Err(ParameterizeError::BadPins { .. })
         ));
-        let same = [Pin { vertex: 0, uv: [0.0, 0.0] }, Pin { vertex: 1, uv: [0.0, 0.0] }];
+        let same = [
+            Pin {
+                vertex: 0,
+                uv: [0.0, 0.0],
+            },
+            Pin {
+                vertex: 1,
+                uv: [0.0, 0.0],
+            },
+        ];
         assert!(LscmSystem::assemble(&chart, &topo, &same).is_err());
-        let outside = [Pin { vertex: 0, uv: [0.0, 0.0] }, Pin { vertex: 99, uv: [1.0, 0.0] }];
+        let outside = [
+            Pin {
+                vertex: 0,
+                uv: [0.0, 0.0],
+            },
+            Pin {
+                vertex: 99,
+                uv: [1.0, 0.0],
+            },
+        ];
         assert!(LscmSystem::assemble(&chart, &topo, &outside).is_err());
     }
 }

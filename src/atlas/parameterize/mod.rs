@@ -88,7 +88,9 @@ pub enum ParameterizeError {
         b: u32,
     },
     /// A vertex has more than one fan of faces (bow-tie).
-    #[error("vertex {vertex} is non-manifold (its faces form several fans); split the chart there")]
+    #[error(
+        "vertex {vertex} is non-manifold (its faces form several fans); split the chart there"
+    )]
     NonManifoldVertex {
         /// Vertex index.
         vertex: u32,

@@ -42,7 +42,7 @@
 use std::collections::BinaryHeap;
 use std::f64::consts::PI;
 
-use super::chart::{cross, dot3, norm3, sub, ChartMesh};
+use super::chart::{cross, dot3, exceeds, norm3, sub, ChartMesh};
 use super::ParameterizeError;
 
 /// One half-edge collapse, in the order they were applied.
@@ -249,7 +249,10 @@ impl ProgressiveMesh {
         for c in self.collapses[lo..hi].iter().rev() {
             let mut p = [0.0, 0.0];
             for k in 0..3 {
-                let q = uv.get(c.triangle[k] as usize).copied().unwrap_or([0.0, 0.0]);
+                let q = uv
+                    .get(c.triangle[k] as usize)
+                    .copied()
+                    .unwrap_or([0.0, 0.0]);
                 p[0] += c.barycentric[k] * q[0];
                 p[1] += c.barycentric[k] * q[1];
             }
@@ -519,13 +522,13 @@ impl<'a> Decimator<'a> {
             let pb = self.pos[t[(k + 2) % 3] as usize];
             let n_old = cross(sub(pa, pu), sub(pb, pu));
             let n_new = cross(sub(pa, pv), sub(pb, pv));
-            if !(dot3(n_old, n_new) > 0.0) {
+            if !exceeds(dot3(n_old, n_new), 0.0) {
                 return None;
             }
             let e = [sub(pa, pv), sub(pb, pv), sub(pb, pa)];
             let longest2 = e.iter().map(|x| dot3(*x, *x)).fold(0.0, f64::max);
             // Keep coarse triangles well away from the validator's degeneracy threshold.
-            if !(norm3(n_new) > 1e-8 * longest2) {
+            if !exceeds(norm3(n_new), 1e-8 * longest2) {
                 return None;
             }
             volume += dot3(n_old, uv).abs() / 6.0;
@@ -662,7 +665,11 @@ mod tests {
             let pm = build_progressive_mesh(&chart, &locked, &ProgressiveMeshOptions::default())
                 .expect("pm");
             let n = chart.positions_m.len();
-            assert!(pm.collapses.len() > n / 2, "decimated only {} of {n}", pm.collapses.len());
+            assert!(
+                pm.collapses.len() > n / 2,
+                "decimated only {} of {n}",
+                pm.collapses.len()
+            );
             let mut removed = vec![false; n];
             for c in &pm.collapses {
                 assert!(!locked.contains(&c.removed));
@@ -671,17 +678,28 @@ mod tests {
                 let s: f64 = c.barycentric.iter().sum();
                 assert!((s - 1.0).abs() < 1e-12 && c.barycentric.iter().all(|&b| b >= 0.0));
             }
-            for applied in [0, pm.collapses.len() / 3, pm.collapses.len() / 2, pm.collapses.len()] {
+            for applied in [
+                0,
+                pm.collapses.len() / 3,
+                pm.collapses.len() / 2,
+                pm.collapses.len(),
+            ] {
                 let level = pm.level(&chart, applied).expect("level");
                 assert_eq!(level.chart.positions_m.len(), pm.vertices_after(applied));
-                level.chart.validate().unwrap_or_else(|e| panic!("level {applied}: {e}"));
+                level
+                    .chart
+                    .validate()
+                    .unwrap_or_else(|e| panic!("level {applied}: {e}"));
                 for &l in &locked {
                     assert_ne!(level.level_vertex[l as usize], u32::MAX);
                 }
                 // Euler: a disk keeps V − E + F = 1, so F = 2V − B − 2 (B boundary vertices).
                 let topo = level.chart.validate().expect("disk");
                 let b = topo.boundary_loop.len();
-                assert_eq!(level.chart.triangles.len(), 2 * level.chart.positions_m.len() - b - 2);
+                assert_eq!(
+                    level.chart.triangles.len(),
+                    2 * level.chart.positions_m.len() - b - 2
+                );
             }
         }
     }
@@ -690,14 +708,18 @@ mod tests {
     fn flat_grid_interior_decimates_and_corners_survive() {
         // The 4 corners have a 90° turning angle (> 70°): they must survive every collapse.
         let chart = grid(12, 12, |x, y| [x, y, 0.0]);
-        let pm = build_progressive_mesh(&chart, &[], &ProgressiveMeshOptions::default())
-            .expect("pm");
+        let pm =
+            build_progressive_mesh(&chart, &[], &ProgressiveMeshOptions::default()).expect("pm");
         let corners = [0u32, 12, 13 * 12, 13 * 13 - 1];
         for c in &pm.collapses {
             assert!(!corners.contains(&c.removed));
         }
         let coarse = pm.level(&chart, pm.collapses.len()).expect("level");
-        assert!(coarse.chart.positions_m.len() <= 8, "{}", coarse.chart.positions_m.len());
+        assert!(
+            coarse.chart.positions_m.len() <= 8,
+            "{}",
+            coarse.chart.positions_m.len()
+        );
         // Vertex splits on a flat grid: barycentric interpolation of the identity map
         // reproduces each re-inserted vertex's (x, y) exactly (it lies in its triangle).
         let mut uv = vec![[f64::NAN; 2]; chart.positions_m.len()];
@@ -707,14 +729,20 @@ mod tests {
         }
         pm.split_to(&mut uv, pm.collapses.len(), 0);
         for (p, q) in chart.positions_m.iter().zip(&uv) {
-            assert!((p[0] - q[0]).abs() < 1e-9 && (p[1] - q[1]).abs() < 1e-9, "{p:?} {q:?}");
+            assert!(
+                (p[0] - q[0]).abs() < 1e-9 && (p[1] - q[1]).abs() < 1e-9,
+                "{p:?} {q:?}"
+            );
         }
     }
 
     #[test]
     fn min_vertices_stops_early_and_is_deterministic() {
         let chart = noisy_height_field(16, 0.3, 2);
-        let opts = ProgressiveMeshOptions { min_vertices: 100, ..Default::default() };
+        let opts = ProgressiveMeshOptions {
+            min_vertices: 100,
+            ..Default::default()
+        };
         let a = build_progressive_mesh(&chart, &[], &opts).expect("pm");
         let b = build_progressive_mesh(&chart, &[], &opts).expect("pm");
         assert_eq!(a, b);
@@ -724,7 +752,13 @@ mod tests {
     #[test]
     fn closest_point_matches_brute_force() {
         let (a, b, c) = ([0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.5]);
-        for p in [[0.5, 0.3, 1.0], [-1.0, -1.0, 0.0], [3.0, 0.1, 0.0], [0.0, 2.0, 1.0], [1.5, 1.5, 0.0]] {
+        for p in [
+            [0.5, 0.3, 1.0],
+            [-1.0, -1.0, 0.0],
+            [3.0, 0.1, 0.0],
+            [0.0, 2.0, 1.0],
+            [1.5, 1.5, 0.0],
+        ] {
             let (bary, d2) = closest_point_barycentric(p, a, b, c);
             let mut best = f64::INFINITY;
             for i in 0..=200 {
