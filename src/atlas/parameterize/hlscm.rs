@@ -19,15 +19,34 @@
 //!    levels hold `n, n/r, n/r², …` vertices with `r = level_ratio` (default 10) down to
 //!    `coarsest_max_vertices`.
 //! 4. "The number of iterations needed at each level depends of the quality of the coarse
-//!    approximation": intermediate levels get `relax_iterations` Jacobi-CG iterations; the
-//!    finest level runs CG to `final_tolerance` (relative residual of the normal equations).
+//!    approximation": intermediate levels get `relax_iterations` CG iterations; the finest level
+//!    runs CG until its stopping rule (below).
+//!
+//! Where we depart from the paper, and why (measured with `texatlas bench parameterize` on the
+//! generated height fields): relaxing with plain Jacobi-CG, as the paper does, did NOT reach the
+//! issue's accuracy target. At 50k triangles, 2 000 Jacobi-CG iterations after the cascadic
+//! start left the energy 2.6e-2 above the direct solve's (5.9e-3 at 250k). The reason is that
+//! a disk always has an exactly conformal continuous map (Riemann), so the discrete LSCM energy
+//! of a smooth chart is pure discretization error and shrinks like h²: a 1e-4 relative target
+//! on that small number asks for a very accurate solve of the low frequencies, exactly what
+//! Jacobi-CG does slowly. So each level's CG is preconditioned with the hierarchy itself: the
+//! additive multilevel (BPX-style) preconditioner `M_l⁻¹ = D_l⁻¹ + P_l·M_{l−1}⁻¹·P_lᵀ`, where
+//! `D_l` is the diagonal, `P_l` the vertex-split interpolation of the progressive mesh (the same
+//! barycentric rule the cascade uses, as a sparse matrix truncated to 6 terms per row), and
+//! `M_0⁻¹` the coarsest level's Cholesky factor. It is symmetric positive definite, so CG stays
+//! valid, and it only changes how fast CG converges, never the minimizer.
+//! [`HlscmSmoother::Jacobi`] keeps the paper's plain relaxation for comparison.
+//!
+//! Stopping rule of the finest level (stated): relative residual `≤ final_tolerance` (1e-9), or
+//! the conformal energy decreased by at most `final_energy_tolerance·C` (1e-6) over the last
+//! `energy_window` (5) iterations, or `final_max_iterations` (500). Measured final energy vs the
+//! direct solve: 2.1e-7 relative at 50k triangles (42 iterations), 5.2e-7 at 250k (50), and
+//! below 1e-6 at 1M (63 iterations, 2 levels of 50k and 501k vertices), i.e. well inside the
+//! 1e-4 target.
 //!
 //! The pins (lscm-2002 §2.6) are chosen on the full chart and locked in the progressive mesh,
-//! so every level solves the same pinned problem.
-//!
-//! Tolerance stated (measured with `texatlas bench parameterize`, see the crate report): with
-//! the defaults the final energy is within 1e-4 relative of the direct solve's energy on the
-//! benchmark height fields. Units as in [`super`]: UVs in model units.
+//! so every level solves the same pinned problem. Units as in [`super`]: UVs in model units.
+//! Determinism: sequential progressive mesh, deterministic CG reductions, sequential faer.
 use std::ops::ControlFlow;
 
 use crate::numerics::{solve_pcg, CgOptions, CsrMatrix, Jacobi, Preconditioner, SparseCholesky};
@@ -557,6 +576,32 @@ mod tests {
             );
             assert!(flipped_faces(&chart, &uv).is_empty());
         }
+    }
+
+    #[test]
+    fn paper_jacobi_relaxation_also_converges_to_the_minimum() {
+        let chart = hemisphere(24, 10);
+        let topo = chart.validate().expect("disk");
+        let pins = diameter_pins(&chart, &topo);
+        let options = HlscmOptions {
+            coarsest_max_vertices: 30,
+            smoother: HlscmSmoother::Jacobi,
+            final_max_iterations: 20_000,
+            final_energy_tolerance: 0.0,
+            final_tolerance: 1e-10,
+            ..HlscmOptions::default()
+        };
+        let (uv, report) = solve_hlscm(&chart, &topo, &pins, &options, &mut |_| {
+            ControlFlow::Continue(())
+        })
+        .expect("hlscm");
+        assert!(report.levels.len() >= 2 && report.converged, "{report:?}");
+        let (e, e_direct) = (conformal_energy(&chart, &uv), direct_energy(&chart));
+        // The direct solution is the minimum: HLSCM can only be above it, and close.
+        assert!(
+            e >= e_direct * (1.0 - 1e-12) && e <= e_direct * (1.0 + 1e-6),
+            "{e} {e_direct}"
+        );
     }
 
     #[test]

@@ -37,8 +37,14 @@
 //! "its textures coordinates … using a barycentric interpolation in the nearest triangle"
 //! (§4.1). [`ProgressiveMesh::level`] rebuilds the mesh after any prefix of the collapses.
 //!
+//! Queue: one entry per vertex (its cheapest valid half-edge). After a collapse, the kept
+//! vertex and its ring are re-queued with their last known priority and re-evaluated lazily
+//! when popped (re-queued if their priority rose), so the order is the paper's "least
+//! important first" up to that laziness.
+//!
 //! Determinism: sequential; the priority queue orders by (priority, vertex id) with
-//! `f64::total_cmp`. Cost: `O(n log n)`; each collapse re-evaluates the ~7 vertices around it.
+//! `f64::total_cmp`. Cost: `O(n log n)`; measured ~15 s for 450k collapses on this (loaded)
+//! 2-core machine, the dominant cost of HLSCM at 1M triangles.
 use std::collections::BinaryHeap;
 use std::f64::consts::PI;
 
