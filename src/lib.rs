@@ -25,6 +25,7 @@
 //! - [`atlas`]: the pipeline. Today: chart parameterization (LSCM, progressive mesh, HLSCM).
 //! - [`gltf_io`]: the only module that knows glTF: decode (with JSON paths for every defect) and
 //!   encode (split vertices at UV seams, carry everything else through).
+//! - [`bench`]: `texatlas bench` measurements (not core: uses time, processes, files).
 //! - [`inspect`]: the `texatlas inspect` report (plain data, built from `gltf_io` + `mesh`).
 //! - [`api`]: the only serde wire types, each mirroring a document in `proto/`, with explicit
 //!   `From` conversions from the domain types.
@@ -40,6 +41,7 @@
 //!   normalized to [0,1], angles are in radians (`_rad`).
 pub mod api;
 pub mod atlas;
+pub mod bench;
 pub mod gltf_io;
 pub mod inspect;
 pub mod mesh;

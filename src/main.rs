@@ -21,12 +21,16 @@ enum Command {
     /// Print meshes, primitives, triangles, welded vertices, boundary loops, genus per connected
     /// component, and every defect of a glTF asset.
     Inspect(cli::inspect::InspectArgs),
+    /// Measurements: `texatlas bench parameterize [--json] [--sizes 50000,250000,1000000]`.
+    #[command(subcommand)]
+    Bench(cli::bench::BenchCommand),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Inspect(args) => cli::inspect::run(&args),
+        Command::Bench(command) => cli::bench::run(&command),
     };
     match result {
         Ok(code) => code,

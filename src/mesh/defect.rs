@@ -179,14 +179,17 @@ pub enum MeshDefect {
         /// Zero area or repeated vertex.
         kind: DegenerateKind,
     },
-    /// An edge shared by more than two triangles. Repair: at most one consistently oriented pair
-    /// (the one holding the lowest face id) stays glued; every other triangle is cut off along
-    /// this edge, which becomes a boundary for it.
+    /// An edge shared by more than two triangles. Repair: the faces are paired greedily in face
+    /// order (the lowest remaining face with the lowest remaining face running the other way
+    /// along the edge); each pair stays glued, forming separate sheets that meet at the edge
+    /// (their end points are then split as non-manifold vertices). Faces without a partner are
+    /// cut off: the edge becomes a boundary for them.
     NonManifoldEdge {
         /// Every face on the edge, ascending.
         faces: Vec<FaceId>,
-        /// The pair that stays glued, if any pair is consistently oriented.
-        glued: Option<[FaceId; 2]>,
+        /// The consistently oriented pairs that stay glued, each ascending, in pairing order
+        /// (empty when all faces run the same way).
+        glued: Vec<[FaceId; 2]>,
         /// The edge's end points as source-vertex indices.
         source_vertices: [u32; 2],
     },
@@ -285,9 +288,14 @@ impl fmt::Display for MeshDefect {
                     faces.len(),
                     list(faces)
                 )?;
-                match glued {
-                    Some([x, y]) => write!(f, "{x} and {y} stay joined, the others are cut off")?,
-                    None => write!(f, "no consistently oriented pair exists, all are cut apart")?,
+                if glued.is_empty() {
+                    write!(f, "no two of them run in opposite directions, all are cut apart")?;
+                } else {
+                    let pairs: Vec<String> = glued.iter().map(|[x, y]| format!("{x}+{y}")).collect();
+                    write!(f, "pairs {} stay joined as separate sheets", pairs.join(", "))?;
+                    if 2 * glued.len() < faces.len() {
+                        write!(f, ", the others are cut off")?;
+                    }
                 }
                 write!(f, "; make every edge border at most two triangles")
             }

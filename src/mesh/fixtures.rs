@@ -15,12 +15,7 @@ use std::f64::consts::PI;
 use super::input::MeshInput;
 
 fn single_group(positions_m: Vec<[f64; 3]>, triangles: Vec<[u32; 3]>) -> MeshInput {
-    let weld_group = vec![0; positions_m.len()];
-    MeshInput {
-        positions_m,
-        triangles,
-        weld_group,
-    }
+    MeshInput::single_group(positions_m, triangles)
 }
 
 /// A flat `nx` × `ny` grid of unit squares in the z = 0 plane, each split into two triangles,
@@ -45,7 +40,7 @@ pub fn grid(nx: u32, ny: u32) -> MeshInput {
     single_group(positions, tris)
 }
 
-/// The unit cube [0,1]³ with split faces, as exported for flat shading: 24 source vertices
+/// The unit cube `[0, 1]³` with split faces, as exported for flat shading: 24 source vertices
 /// (4 per side, each a separate copy), 12 triangles, outward. Welds to 8 vertices, closed, genus 0.
 pub fn cube_split_faces() -> MeshInput {
     // Each side: an origin corner and two edge directions whose cross product points outward.

@@ -79,13 +79,24 @@ fn scaled_edges(p: &[[f64; 3]; 3]) -> ([f64; 3], [f64; 3], f64) {
 
 /// True when the triangle `p` has (numerically) zero area; see [`ZERO_AREA_RELATIVE_TOLERANCE`].
 pub fn triangle_is_zero_area(p: &[[f64; 3]; 3]) -> bool {
-    let (e1, e2, m) = scaled_edges(p);
-    if m == 0.0 || !m.is_finite() {
-        return true;
-    }
+    // Fast path: with every |coordinate| in [1e-60, 1e60] (or exactly 0), differences, squares
+    // and cross products can neither overflow nor underflow to 0, so no rescaling is needed.
+    let m = p.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+    let (e1, e2) = if m > 1e-60 && m < 1e60 {
+        (sub(p[1], p[0]), sub(p[2], p[0]))
+    } else {
+        let (e1, e2, m) = scaled_edges(p);
+        if m == 0.0 || !m.is_finite() {
+            return true;
+        }
+        (e1, e2)
+    };
     let e3 = sub(e2, e1);
     let longest_sq = dot(e1, e1).max(dot(e2, e2)).max(dot(e3, e3));
-    norm(cross(e1, e2)) <= ZERO_AREA_RELATIVE_TOLERANCE * longest_sq
+    let c = cross(e1, e2);
+    // Compare squares: no square root on the 1M-face build path.
+    dot(c, c)
+        <= ZERO_AREA_RELATIVE_TOLERANCE * ZERO_AREA_RELATIVE_TOLERANCE * longest_sq * longest_sq
 }
 
 impl TriangleMesh {

@@ -16,3 +16,15 @@ pub struct MeshInput {
     /// mesh index, because different meshes live in different local spaces.
     pub weld_group: Vec<u32>,
 }
+
+impl MeshInput {
+    /// A soup whose vertices all share weld group 0 (one mesh, one local space).
+    pub fn single_group(positions_m: Vec<[f64; 3]>, triangles: Vec<[u32; 3]>) -> Self {
+        let weld_group = vec![0; positions_m.len()];
+        Self {
+            positions_m,
+            triangles,
+            weld_group,
+        }
+    }
+}

@@ -20,9 +20,11 @@
 //!
 //! Repaired (a [`MeshDefect`] in [`BuiltMesh::defects`]; **nothing is silently dropped, no face is
 //! removed, reordered or flipped**: face `i` is input triangle `i` with its corner order):
-//! - **Non-manifold edge** (more than two faces on one edge): the lowest face on the edge stays
-//!   glued to the lowest face running the other way along it (if any); every other face is cut
-//!   off, i.e. the edge is a boundary for it.
+//! - **Non-manifold edge** (more than two faces on one edge): the faces are paired greedily in
+//!   face order, the lowest remaining face with the lowest remaining face running the other way
+//!   along the edge. Each pair stays glued, so e.g. two closed cubes sharing an edge stay two
+//!   closed cubes; a face left without a partner (a fin) is cut off, i.e. the edge is a boundary
+//!   for it.
 //! - **Inconsistent orientation** (two faces running the same way along a shared edge): the edge
 //!   is cut, both sides become boundary. Faces are never flipped, because the corner order is the
 //!   output's and a flip would change the asset's shading.

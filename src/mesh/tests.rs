@@ -39,6 +39,16 @@ fn check_against_input(input: &MeshInput, m: &TriangleMesh) {
             );
         }
     }
+    // Source vertices per vertex, collected from the face list, match the one-ring answer.
+    let mut sources: Vec<BTreeSet<u32>> = vec![BTreeSet::new(); m.num_vertices()];
+    for c in (0..m.num_corners() as u32).map(CornerId) {
+        sources[m.corner_vertex(c).index()].insert(m.corner_source(c));
+    }
+    for v in m.vertices() {
+        let expected: Vec<u32> = sources[v.index()].iter().copied().collect();
+        assert_eq!(m.source_vertices_of(v), expected, "{v}");
+        assert_eq!(Some(&m.vertex_source(v)), expected.first(), "{v}");
+    }
 }
 
 /// Euler characteristic and boundary-edge count recomputed from face vertex triples only.
@@ -402,6 +412,7 @@ fn bowtie_vertex_is_split_into_two_sheets() {
     );
     let m = &b.mesh;
     assert_eq!(m.num_vertices(), 6);
+    assert_eq!(b.num_welded_vertices, 5);
     assert_eq!(m.face_vertices(FaceId(0))[0], VertexId(0));
     assert_eq!(m.face_vertices(FaceId(1))[0], VertexId(1));
     assert_eq!(m.position(VertexId(0)), m.position(VertexId(1)));
@@ -423,7 +434,7 @@ fn fin_keeps_the_lowest_consistent_pair_and_cuts_the_rest() {
         b.defects[0],
         MeshDefect::NonManifoldEdge {
             faces: vec![FaceId(0), FaceId(1), FaceId(2)],
-            glued: Some([FaceId(0), FaceId(1)]),
+            glued: vec![[FaceId(0), FaceId(1)]],
             source_vertices: [0, 1],
         }
     );
@@ -458,10 +469,58 @@ fn fin_without_consistent_pair_is_cut_apart() {
     let b = build_ok(&input);
     assert!(matches!(
         &b.defects[0],
-        MeshDefect::NonManifoldEdge { glued: None, faces, .. } if faces.len() == 3
+        MeshDefect::NonManifoldEdge { glued, faces, .. } if glued.is_empty() && faces.len() == 3
     ));
     assert!(b.defects[0].to_string().contains("all are cut apart"));
     assert_eq!(b.mesh.components().len(), 3);
+}
+
+#[test]
+fn four_faces_on_an_edge_become_two_glued_sheets() {
+    // Two closed cubes (8 vertices each after welding) sharing one edge: x = 1, y = 1, z in [0, 1].
+    let a = cube_split_faces();
+    let mut b = cube_split_faces();
+    for p in &mut b.positions_m {
+        p[0] += 1.0;
+        p[1] += 1.0;
+    }
+    let built = build_ok(&concat(&[a, b]));
+    let edges: Vec<_> = built
+        .defects
+        .iter()
+        .filter_map(|d| match d {
+            MeshDefect::NonManifoldEdge { faces, glued, .. } => Some((faces.len(), glued.len())),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(edges, vec![(4, 2)]);
+    let text = built.defects[0].to_string();
+    assert!(
+        text.contains("stay joined as separate sheets") && !text.contains("cut off"),
+        "{text}"
+    );
+    // Both cubes stay closed spheres; the two shared corners are split, one copy per cube.
+    let comps = built.mesh.components();
+    assert_eq!(comps.len(), 2);
+    for c in &comps.components {
+        assert_eq!(
+            (
+                c.num_vertices,
+                c.num_boundary_loops,
+                c.genus,
+                c.euler_characteristic
+            ),
+            (8, 0, 0, 2)
+        );
+    }
+    let split: usize = built
+        .defects
+        .iter()
+        .filter(
+            |d| matches!(d, MeshDefect::NonManifoldVertex { vertices, .. } if vertices.len() == 2),
+        )
+        .count();
+    assert_eq!(split, 2);
 }
 
 #[test]
@@ -529,6 +588,7 @@ fn degenerate_triangles_are_kept_reported_and_isolated_when_needed() {
     assert_eq!(m.face_neighbors(FaceId(3)), [None; 3]);
     assert_eq!(m.face_neighbors(FaceId(4)), [None; 3]);
     assert_eq!(m.num_vertices(), 11);
+    assert_eq!(b.num_welded_vertices, 5);
     assert_eq!(
         m.face_degeneracy(FaceId(4)),
         Some(DegenerateKind::RepeatedVertex)
@@ -812,4 +872,86 @@ proptest! {
             }
         }
     }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Realistic damage on a closed torus: reversed faces, duplicated faces (as is or reversed),
+    /// shuffled face order. The result is always a valid mesh with every face kept, reversing a
+    /// face of a closed surface is always reported, and shuffling alone changes no topology.
+    #[test]
+    fn damaged_torus_is_repaired_and_reported(
+        flips in proptest::collection::vec(0usize..128, 0..4),
+        dups in proptest::collection::vec((0usize..128, any::<bool>()), 0..4),
+        shuffle in proptest::collection::vec(any::<proptest::sample::Index>(), 128),
+    ) {
+        let mut input = torus(8, 8, 2.0, 0.5);
+        // Shuffle the face order (a permutation by Fisher-Yates on the given indices).
+        for (i, idx) in shuffle.iter().enumerate().rev() {
+            let j = idx.index(i + 1);
+            input.triangles.swap(i, j);
+        }
+        let shuffled = build_ok(&input);
+        prop_assert!(shuffled.defects.is_empty());
+        prop_assert_eq!(shuffled.mesh.num_vertices(), 64);
+        let c = shuffled.mesh.components();
+        prop_assert_eq!((c.len(), c.components[0].genus), (1, 1));
+
+        let mut flipped = BTreeSet::new();
+        for &f in &flips {
+            input.triangles[f].swap(1, 2);
+            if !flipped.insert(f) {
+                flipped.remove(&f);
+            }
+        }
+        for &(f, reverse) in &dups {
+            let mut t = input.triangles[f];
+            if reverse {
+                t.swap(1, 2);
+            }
+            input.triangles.push(t);
+        }
+        let b = build_ok(&input);
+        let orientation_or_edge = b.defects.iter().any(|d| matches!(
+            d,
+            MeshDefect::InconsistentOrientation { .. } | MeshDefect::NonManifoldEdge { .. }
+        ));
+        prop_assert_eq!(orientation_or_edge, !flipped.is_empty() || !dups.is_empty());
+        if flipped.is_empty() && dups.is_empty() {
+            prop_assert!(b.defects.is_empty());
+        }
+        // Every face named by a defect exists, and every edge defect names the faces on it.
+        for d in &b.defects {
+            for f in d.faces() {
+                prop_assert!(f.index() < b.mesh.num_faces());
+            }
+        }
+    }
+}
+
+#[test]
+fn hostile_edge_shared_by_many_faces_is_handled_in_linear_time() {
+    // 100k triangles on the edge 0-1, alternating direction: a "book" with 100k pages.
+    let n = 100_000u32;
+    let mut positions_m = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]];
+    let mut triangles = Vec::new();
+    for i in 0..n {
+        let a = 2.0 * std::f64::consts::PI * f64::from(i) / f64::from(n);
+        positions_m.push([0.5, a.cos(), a.sin()]);
+        triangles.push(if i % 2 == 0 {
+            [0, 1, i + 2]
+        } else {
+            [1, 0, i + 2]
+        });
+    }
+    let b = build_ok(&MeshInput::single_group(positions_m, triangles));
+    let MeshDefect::NonManifoldEdge { faces, glued, .. } = &b.defects[0] else {
+        panic!("{:?}", b.defects.first())
+    };
+    assert_eq!((faces.len(), glued.len()), (n as usize, n as usize / 2));
+    assert_eq!(glued[1], [FaceId(2), FaceId(3)]);
+    // Each glued pair is its own sheet: both edge end points get n/2 copies.
+    assert_eq!(b.mesh.num_vertices(), n as usize + 2 * (n as usize / 2));
+    assert_eq!(b.mesh.components().len(), n as usize / 2);
 }

@@ -187,6 +187,17 @@ impl TriangleMesh {
             current: Some(start),
         }
     }
+    /// The corners at `v` (one per incident face), in rotation order; the same numbers as
+    /// [`Self::outgoing_halfedges`].
+    pub fn vertex_corners(&self, v: VertexId) -> impl Iterator<Item = CornerId> + '_ {
+        self.outgoing_halfedges(v).map(HalfedgeId::corner)
+    }
+    /// One half-edge per undirected edge: each boundary half-edge, and the lower-numbered
+    /// half-edge of each glued pair. Use it as the edge key (see the module invariants).
+    pub fn edges(&self) -> impl Iterator<Item = HalfedgeId> + '_ {
+        self.halfedges()
+            .filter(|&h| self.opposite(h).is_none_or(|o| h < o))
+    }
     /// The neighbouring vertices of `v` in rotation order. A boundary vertex with `k` faces has
     /// `k + 1` neighbours, an interior one `k`. Cost: one rotation around `v`.
     pub fn vertex_neighbors(&self, v: VertexId) -> Vec<VertexId> {

@@ -1,1 +1,278 @@
 //! Chart parameterization: LSCM (Lévy et al. 2002 §2) and hierarchical LSCM (Ray & Lévy 2003).
+//!
+//! Purpose: flatten one chart (a topological disk, [`ChartMesh`]) into the plane with the least
+//! squares conformal map, choosing between a sparse direct solve (small and medium charts) and
+//! the cascadic multigrid over a progressive mesh (HLSCM, huge charts).
+//!
+//! Guarantees to the next stage (issue 3 §5):
+//! - every returned map has finite UVs, one per chart vertex;
+//! - flips are never hidden: [`ChartMap::flipped_faces`] lists every face whose UV image has
+//!   non-positive signed area (empty means valid), so that chart validation can split the chart
+//!   (lscm-2002 §3.3);
+//! - deterministic: same input, same output bits, whatever the rayon thread count (fixed
+//!   reduction trees in `numerics`, sequential faer, sequential progressive-mesh construction).
+//!
+//! Units: positions in model units (`_m`); UVs in model units (the second pin sits at the
+//! pins' path length from the first), NOT yet normalized to [0,1]: packing does that.
+//!
+//! Code map: [`chart`] (input and validation), [`lscm`] (the LSCM system, §2),
+//! [`progressive_mesh`] (half-edge collapses, hlscm-2003 §4), [`hlscm`] (cascadic multigrid,
+//! hlscm-2003 §3.3 and §4.1).
+pub mod chart;
+pub mod hlscm;
+pub mod lscm;
+pub mod progressive_mesh;
+#[cfg(test)]
+pub(crate) mod test_meshes;
+
+use std::ops::ControlFlow;
+
+pub use chart::{ChartMesh, ChartTopology};
+pub use hlscm::{HlscmOptions, HlscmReport};
+pub use lscm::{conformal_energy, flipped_faces, LscmSystem, Pin};
+
+use crate::numerics::{CgOptions, CholeskyError, SparseError};
+
+/// Errors of the parameterization stage. Every variant says what is wrong and how to fix it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ParameterizeError {
+    /// The chart has no triangle.
+    #[error("chart has no triangles; do not send empty charts to parameterization")]
+    EmptyChart,
+    /// More vertices than the solvers index (`u32`, two unknowns per vertex).
+    #[error("chart has {vertices} vertices, more than the 2^31 supported; split the chart")]
+    TooLarge {
+        /// Vertex count.
+        vertices: usize,
+    },
+    /// A triangle refers to a vertex that does not exist.
+    #[error("triangle {triangle} refers to vertex {index} but the chart has {vertices} vertices; fix the chart extraction")]
+    IndexOutOfRange {
+        /// Triangle index.
+        triangle: u32,
+        /// Offending index.
+        index: u32,
+        /// Vertex count.
+        vertices: usize,
+    },
+    /// A triangle uses the same vertex twice.
+    #[error("triangle {triangle} uses a vertex twice; remove degenerate triangles before parameterization")]
+    RepeatedVertex {
+        /// Triangle index.
+        triangle: u32,
+    },
+    /// A position is NaN or infinite.
+    #[error("vertex {vertex} has a non-finite position; repair the mesh")]
+    NonFinitePosition {
+        /// Vertex index.
+        vertex: u32,
+    },
+    /// A triangle has (numerically) zero area.
+    #[error("triangle {triangle} has zero area (relative to its longest edge); remove or repair slivers before parameterization")]
+    DegenerateTriangle {
+        /// Triangle index.
+        triangle: u32,
+    },
+    /// A vertex is used by no triangle (it would make the LSCM system singular).
+    #[error("vertex {vertex} is used by no triangle; compact the chart's vertices")]
+    UnreferencedVertex {
+        /// Vertex index.
+        vertex: u32,
+    },
+    /// A directed edge appears twice: more than two faces on an edge, or inconsistent winding.
+    #[error("edge {a}->{b} is used twice in the same direction (non-manifold edge or inconsistent orientation); split or re-orient the chart")]
+    NonManifoldEdge {
+        /// Edge start.
+        a: u32,
+        /// Edge end.
+        b: u32,
+    },
+    /// A vertex has more than one fan of faces (bow-tie).
+    #[error(
+        "vertex {vertex} is non-manifold (its faces form several fans); split the chart there"
+    )]
+    NonManifoldVertex {
+        /// Vertex index.
+        vertex: u32,
+    },
+    /// The chart is not connected.
+    #[error("chart is not connected ({reached} of {vertices} vertices reachable); send each component as its own chart")]
+    Disconnected {
+        /// Vertices reachable from vertex 0.
+        reached: usize,
+        /// Vertex count.
+        vertices: usize,
+    },
+    /// The chart is not a topological disk.
+    #[error("chart is not a disk ({boundary_loops} boundary loops, Euler characteristic {euler_characteristic}, a disk has 1 and 1); cut it into disks first")]
+    NotADisk {
+        /// Number of boundary loops.
+        boundary_loops: usize,
+        /// `V − E + F`.
+        euler_characteristic: i64,
+    },
+    /// Pins are unusable.
+    #[error("invalid pins: {detail}")]
+    BadPins {
+        /// What is wrong.
+        detail: String,
+    },
+    /// Sparse assembly or product failed (a bug: the chart was validated).
+    #[error("sparse assembly failed: {0}")]
+    Sparse(SparseError),
+    /// The direct solver failed.
+    #[error("direct solve failed: {0}")]
+    Direct(CholeskyError),
+    /// The solver produced non-finite UVs.
+    #[error("the solver produced non-finite UVs; the chart is too badly conditioned, split it")]
+    NonFiniteResult,
+    /// The caller's monitor asked to stop.
+    #[error("parameterization was cancelled")]
+    Cancelled,
+    /// An internal invariant broke (a bug, reported rather than panicking).
+    #[error("internal error in parameterization: {detail}; please report it with the input")]
+    Internal {
+        /// What broke.
+        detail: String,
+    },
+}
+
+/// Which solver flattens a chart.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ParameterizeMethod {
+    /// Direct below [`ParameterizeOptions::auto_hierarchical_min_vertices`], hierarchical above.
+    #[default]
+    Auto,
+    /// Sparse Cholesky on the normal equations (exact up to rounding).
+    Direct,
+    /// HLSCM: cascadic multigrid over a progressive mesh (hlscm-2003).
+    Hierarchical,
+    /// Single-level Jacobi-preconditioned CG from zero (slow at scale; for reference).
+    ConjugateGradient,
+}
+
+/// Options of [`parameterize_chart`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParameterizeOptions {
+    /// Solver choice. Default [`ParameterizeMethod::Auto`].
+    pub method: ParameterizeMethod,
+    /// With `Auto`, charts with at least this many vertices use HLSCM. Default 250_000, from the
+    /// crossover measured by `texatlas bench parameterize` (see `hlscm` module doc).
+    pub auto_hierarchical_min_vertices: usize,
+    /// HLSCM tuning.
+    pub hlscm: HlscmOptions,
+    /// CG settings for [`ParameterizeMethod::ConjugateGradient`]. Default: relative residual
+    /// 1e-10, at most 100_000 iterations.
+    pub cg: CgOptions,
+}
+
+impl Default for ParameterizeOptions {
+    fn default() -> Self {
+        Self {
+            method: ParameterizeMethod::Auto,
+            auto_hierarchical_min_vertices: 250_000,
+            hlscm: HlscmOptions::default(),
+            cg: CgOptions {
+                tolerance: 1e-10,
+                max_iterations: 100_000,
+            },
+        }
+    }
+}
+
+/// The flattened chart.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChartMap {
+    /// UV per chart vertex, model units, not yet normalized or packed.
+    pub uv: Vec<[f64; 2]>,
+    /// `C(U)` of lscm-2002 §2.4 recomputed from `uv` by [`conformal_energy`].
+    pub conformal_energy: f64,
+    /// Faces whose UV image has non-positive signed area. Empty means the map is valid.
+    pub flipped_faces: Vec<u32>,
+    /// The solver that produced the map (never `Auto`).
+    pub method_used: ParameterizeMethod,
+    /// CG iterations (0 for the direct solve; finest-level iterations for HLSCM).
+    pub iterations: usize,
+    /// The two pinned vertices (lscm-2002 §2.6).
+    pub pins: [u32; 2],
+    /// HLSCM details when it was used.
+    pub hlscm: Option<HlscmReport>,
+}
+
+impl ChartMap {
+    /// True when no face is flipped (the guarantee the next stage needs).
+    pub fn is_valid(&self) -> bool {
+        self.flipped_faces.is_empty()
+    }
+}
+
+/// Flattens one chart. See the module doc for the guarantees.
+///
+/// Errors: any defect of the chart (see [`ChartMesh::validate`]) or a solver failure.
+pub fn parameterize_chart(
+    chart: &ChartMesh,
+    options: &ParameterizeOptions,
+) -> Result<ChartMap, ParameterizeError> {
+    parameterize_chart_with_monitor(chart, options, &mut |_| ControlFlow::Continue(()))
+}
+
+/// [`parameterize_chart`] with a monitor called with `(done, total)` CG iterations on the
+/// iterative paths; returning `Break` cancels with [`ParameterizeError::Cancelled`]. This is
+/// where the pipeline's `Progress` trait plugs in.
+pub fn parameterize_chart_with_monitor(
+    chart: &ChartMesh,
+    options: &ParameterizeOptions,
+    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
+) -> Result<ChartMap, ParameterizeError> {
+    let topology = chart.validate()?;
+    let pins = lscm::diameter_pins(chart, &topology);
+    let method = match options.method {
+        ParameterizeMethod::Auto => {
+            if chart.positions_m.len() >= options.auto_hierarchical_min_vertices {
+                ParameterizeMethod::Hierarchical
+            } else {
+                ParameterizeMethod::Direct
+            }
+        }
+        m => m,
+    };
+    let (uv, iterations, report) = match method {
+        ParameterizeMethod::Direct | ParameterizeMethod::Auto => {
+            let system = LscmSystem::assemble(chart, &topology, &pins)?;
+            let x = system.solve_direct()?;
+            (system.uv_from_solution(&x), 0, None)
+        }
+        ParameterizeMethod::ConjugateGradient => {
+            let system = LscmSystem::assemble(chart, &topology, &pins)?;
+            let mut x = vec![0.0; system.unknowns()];
+            let mut cancelled = false;
+            let total = options.cg.max_iterations;
+            let outcome = system.solve_cg(&mut x, &options.cg, &mut |step| {
+                let flow = monitor((step.iteration, total));
+                cancelled = flow.is_break();
+                flow
+            })?;
+            if cancelled {
+                return Err(ParameterizeError::Cancelled);
+            }
+            (system.uv_from_solution(&x), outcome.iterations, None)
+        }
+        ParameterizeMethod::Hierarchical => {
+            let (uv, report) =
+                hlscm::solve_hlscm(chart, &topology, &pins, &options.hlscm, monitor)?;
+            (uv, report.finest_iterations, Some(report))
+        }
+    };
+    if !uv.iter().all(|p| p[0].is_finite() && p[1].is_finite()) {
+        return Err(ParameterizeError::NonFiniteResult);
+    }
+    Ok(ChartMap {
+        conformal_energy: conformal_energy(chart, &uv),
+        flipped_faces: flipped_faces(chart, &uv),
+        uv,
+        method_used: method,
+        iterations,
+        pins: [pins[0].vertex, pins[1].vertex],
+        hlscm: report,
+    })
+}

@@ -1,0 +1,253 @@
+//! Oracle tests of chart parameterization through the public API only: every method on every
+//! disk-shaped test mesh (generated here, no external files), checked against quantities
+//! recomputed independently of the solvers.
+use std::ops::ControlFlow;
+
+use texatlas::atlas::parameterize::{
+    parameterize_chart, parameterize_chart_with_monitor, ChartMesh, HlscmOptions,
+    ParameterizeError, ParameterizeMethod, ParameterizeOptions,
+};
+
+fn grid(n: usize, height: impl Fn(f64, f64) -> f64) -> ChartMesh {
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let mut positions_m = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (i as f64 / n as f64, j as f64 / n as f64);
+            positions_m.push([x, y, height(x, y)]);
+        }
+    }
+    let mut triangles = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    ChartMesh {
+        positions_m,
+        triangles,
+    }
+}
+
+/// Spherical cap of the unit sphere up to polar angle `max_polar_rad`, as a disk.
+fn cap(segments: usize, rings: usize, max_polar_rad: f64) -> ChartMesh {
+    let mut positions_m = vec![[0.0, 0.0, 1.0]];
+    for j in 1..=rings {
+        let t = max_polar_rad * j as f64 / rings as f64;
+        for i in 0..segments {
+            let a = 2.0 * std::f64::consts::PI * i as f64 / segments as f64;
+            positions_m.push([t.sin() * a.cos(), t.sin() * a.sin(), t.cos()]);
+        }
+    }
+    let id = |i: usize, j: usize| (1 + (j - 1) * segments + (i % segments)) as u32;
+    let mut triangles = Vec::new();
+    for i in 0..segments {
+        triangles.push([0, id(i, 1), id(i + 1, 1)]);
+    }
+    for j in 1..rings {
+        for i in 0..segments {
+            triangles.push([id(i, j), id(i, j + 1), id(i + 1, j + 1)]);
+            triangles.push([id(i, j), id(i + 1, j + 1), id(i + 1, j)]);
+        }
+    }
+    ChartMesh {
+        positions_m,
+        triangles,
+    }
+}
+
+/// Conformal energy via cotangent Dirichlet energy minus the signed UV area (×2 for the
+/// paper's convention): shares no code with the crate.
+fn cotan_energy(chart: &ChartMesh, uv: &[[f64; 2]]) -> f64 {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let mut e = 0.0;
+    for t in &chart.triangles {
+        let p = t.map(|i| chart.positions_m[i as usize]);
+        let q = t.map(|i| uv[i as usize]);
+        for k in 0..3 {
+            let (i, j, o) = (k, (k + 1) % 3, (k + 2) % 3);
+            let (a, b) = (sub(p[i], p[o]), sub(p[j], p[o]));
+            let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+            let c = [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ];
+            let cot = dot / (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+            let (du, dv) = (q[i][0] - q[j][0], q[i][1] - q[j][1]);
+            e += 0.5 * cot * (du * du + dv * dv);
+        }
+        e -= (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1]);
+    }
+    2.0 * e
+}
+
+fn signed_areas(chart: &ChartMesh, uv: &[[f64; 2]]) -> Vec<f64> {
+    chart
+        .triangles
+        .iter()
+        .map(|t| {
+            let q = t.map(|i| uv[i as usize]);
+            (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1])
+        })
+        .collect()
+}
+
+fn meshes() -> Vec<(&'static str, ChartMesh)> {
+    vec![
+        ("flat", grid(20, |_, _| 0.0)),
+        (
+            "bumps",
+            grid(40, |x, y| 0.1 * (6.0 * x).sin() * (5.0 * y).cos()),
+        ),
+        (
+            "noisy",
+            grid(30, |x, y| {
+                0.05 * (9.0 * x).sin() + 0.004 * ((x * 997.0 + y * 131.0).sin())
+            }),
+        ),
+        ("hemisphere", cap(40, 20, std::f64::consts::FRAC_PI_2)),
+        ("deep cap", cap(32, 24, 2.2)),
+    ]
+}
+
+fn options(method: ParameterizeMethod) -> ParameterizeOptions {
+    ParameterizeOptions {
+        method,
+        hlscm: HlscmOptions {
+            coarsest_max_vertices: 150,
+            ..HlscmOptions::default()
+        },
+        ..ParameterizeOptions::default()
+    }
+}
+
+#[test]
+fn every_method_gives_finite_unflipped_maps_with_the_reported_energy() {
+    for (name, chart) in meshes() {
+        let direct = parameterize_chart(&chart, &options(ParameterizeMethod::Direct)).expect(name);
+        for method in [
+            ParameterizeMethod::Direct,
+            ParameterizeMethod::Hierarchical,
+            ParameterizeMethod::ConjugateGradient,
+            ParameterizeMethod::Auto,
+        ] {
+            let map = parameterize_chart(&chart, &options(method)).expect(name);
+            assert_eq!(map.uv.len(), chart.positions_m.len());
+            assert!(
+                map.uv.iter().all(|p| p[0].is_finite() && p[1].is_finite()),
+                "{name}"
+            );
+            // The typed flip list agrees with an independent signed-area computation.
+            let flips = signed_areas(&chart, &map.uv)
+                .iter()
+                .filter(|&&a| a <= 0.0)
+                .count();
+            assert_eq!(flips, map.flipped_faces.len(), "{name} {method:?}");
+            assert!(
+                map.is_valid(),
+                "{name} {method:?}: {} flips",
+                map.flipped_faces.len()
+            );
+            // Reported energy equals the cotangent-formula recomputation.
+            let e = cotan_energy(&chart, &map.uv);
+            let scale: f64 = map
+                .uv
+                .iter()
+                .map(|p| p[0] * p[0] + p[1] * p[1])
+                .sum::<f64>()
+                / map.uv.len() as f64;
+            assert!(
+                (e - map.conformal_energy).abs()
+                    <= 1e-9 * map.conformal_energy.abs() + 1e-12 * scale,
+                "{name} {method:?}: {e} vs {}",
+                map.conformal_energy
+            );
+            // Every method reaches the direct solve's energy within 1e-4 relative (or the
+            // absolute rounding floor on the developable flat patch).
+            let floor = 1e-10 * scale;
+            assert!(
+                (map.conformal_energy - direct.conformal_energy).abs()
+                    <= 1e-4 * direct.conformal_energy + floor,
+                "{name} {method:?}: {} vs direct {}",
+                map.conformal_energy,
+                direct.conformal_energy
+            );
+            assert_ne!(map.method_used, ParameterizeMethod::Auto);
+        }
+    }
+}
+
+#[test]
+fn hierarchical_really_uses_several_levels_here() {
+    let (_, chart) = meshes().swap_remove(1);
+    let map = parameterize_chart(&chart, &options(ParameterizeMethod::Hierarchical)).expect("ok");
+    let report = map.hlscm.expect("report");
+    assert!(report.levels.len() >= 2, "{report:?}");
+    assert!(report.converged);
+    assert!(report
+        .levels
+        .windows(2)
+        .all(|w| w[0].vertices < w[1].vertices));
+    assert_eq!(
+        report.levels.last().map(|l| l.vertices),
+        Some(chart.positions_m.len())
+    );
+}
+
+#[test]
+fn results_are_bit_identical_whatever_the_thread_count() {
+    let (_, chart) = meshes().swap_remove(2);
+    for method in [ParameterizeMethod::Direct, ParameterizeMethod::Hierarchical] {
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool")
+                .install(|| parameterize_chart(&chart, &options(method)).expect("ok"))
+        };
+        let (a, b) = (run(1), run(3));
+        assert!(a
+            .uv
+            .iter()
+            .zip(&b.uv)
+            .all(|(p, q)| p[0].to_bits() == q[0].to_bits() && p[1].to_bits() == q[1].to_bits()));
+        assert_eq!(a.conformal_energy.to_bits(), b.conformal_energy.to_bits());
+    }
+}
+
+#[test]
+fn monitor_can_cancel_iterative_solves() {
+    let (_, chart) = meshes().swap_remove(1);
+    for method in [
+        ParameterizeMethod::ConjugateGradient,
+        ParameterizeMethod::Hierarchical,
+    ] {
+        let mut calls = 0;
+        let result = parameterize_chart_with_monitor(&chart, &options(method), &mut |_| {
+            calls += 1;
+            ControlFlow::Break(())
+        });
+        assert_eq!(result, Err(ParameterizeError::Cancelled), "{method:?}");
+        assert_eq!(calls, 1);
+    }
+}
+
+#[test]
+fn bad_charts_are_typed_errors_never_panics() {
+    let mut chart = grid(3, |_, _| 0.0);
+    chart.triangles.push([0, 1, 99]);
+    assert!(matches!(
+        parameterize_chart(&chart, &ParameterizeOptions::default()),
+        Err(ParameterizeError::IndexOutOfRange { .. })
+    ));
+    let closed = ChartMesh {
+        positions_m: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]],
+    };
+    assert!(matches!(
+        parameterize_chart(&closed, &ParameterizeOptions::default()),
+        Err(ParameterizeError::NotADisk { .. })
+    ));
+}
