@@ -70,8 +70,10 @@ pub struct PrimitiveJson {
 /// The welded surface.
 #[derive(Debug, Clone, Serialize)]
 pub struct SurfaceJson {
-    /// Vertices after welding by position.
+    /// Distinct vertices after welding by position.
     pub welded_vertices: usize,
+    /// Vertices of the repaired mesh (welded vertices plus repair copies).
+    pub mesh_vertices: usize,
     /// Undirected edges.
     pub edges: usize,
     /// Boundary loops over all components.
@@ -198,6 +200,7 @@ impl From<&Surface> for SurfaceJson {
     fn from(s: &Surface) -> Self {
         SurfaceJson {
             welded_vertices: s.welded_vertices,
+            mesh_vertices: s.mesh_vertices,
             edges: s.edges,
             boundary_loops: s.boundary_loops,
             components: s.components.iter().map(ComponentJson::from).collect(),

@@ -30,8 +30,11 @@ pub struct InspectReport {
 /// The welded, repaired surface of all triangle primitives.
 #[derive(Debug, Clone)]
 pub struct Surface {
-    /// Vertices after welding by position (and after splitting non-manifold vertices).
+    /// Distinct vertices after welding by position (the surface's real vertex count).
     pub welded_vertices: usize,
+    /// Vertices of the repaired mesh: welded vertices plus the copies made by splitting
+    /// non-manifold vertices and isolating repeated-vertex triangles. Components count these.
+    pub mesh_vertices: usize,
     /// Undirected edges.
     pub edges: usize,
     /// Boundary loops over all components.
@@ -48,10 +51,15 @@ pub struct Surface {
 pub fn inspect(asset: &gltf_io::Asset) -> InspectReport {
     let input = asset.mesh_input();
     let surface = TriangleMesh::build(input).map(|built| {
-        let mesh::BuiltMesh { mesh, defects } = built;
+        let mesh::BuiltMesh {
+            mesh,
+            defects,
+            num_welded_vertices,
+        } = built;
         let components = mesh.components().components;
         Surface {
-            welded_vertices: mesh.num_vertices(),
+            welded_vertices: num_welded_vertices,
+            mesh_vertices: mesh.num_vertices(),
             edges: mesh.num_edges(),
             boundary_loops: components.iter().map(|c| c.num_boundary_loops).sum(),
             components,
@@ -81,6 +89,7 @@ mod tests {
         assert_eq!(report.source_vertices, 24, "Box splits its 8 corners per face normal");
         let surface = report.surface.expect("surface");
         assert_eq!(surface.welded_vertices, 8, "welding by position recovers the 8 corners");
+        assert_eq!(surface.mesh_vertices, 8, "nothing to repair");
         assert_eq!(surface.edges, 18);
         assert_eq!(surface.boundary_loops, 0);
         assert_eq!(surface.components.len(), 1);

@@ -94,8 +94,9 @@ fn text(file: &Path, file_bytes: u64, report: &InspectReport, timings: TimingsJs
         Ok(s) => {
             let _ = writeln!(
                 out,
-                "surface: {} welded vertices, {} edges, {} boundary loops, {} connected component(s)",
+                "surface: {} welded vertices ({} after repair), {} edges, {} boundary loops, {} connected component(s)",
                 s.welded_vertices,
+                s.mesh_vertices,
                 s.edges,
                 s.boundary_loops,
                 s.components.len()
