@@ -955,3 +955,39 @@ fn hostile_edge_shared_by_many_faces_is_handled_in_linear_time() {
     assert_eq!(b.mesh.num_vertices(), n as usize + 2 * (n as usize / 2));
     assert_eq!(b.mesh.components().len(), n as usize / 2);
 }
+
+#[test]
+fn navigation_wrappers_agree_with_id_arithmetic() {
+    let m = build_ok(&uv_sphere(4, 5, 1.0)).mesh;
+    assert_eq!(m.num_halfedges(), 3 * m.num_faces());
+    assert_eq!(m.num_corners(), m.num_halfedges());
+    assert_eq!(m.positions_m().len(), m.num_vertices());
+    let mut per_halfedge: HalfedgeData<f64> = HalfedgeData::filled(m.num_halfedges(), 0.0);
+    for h in m.halfedges() {
+        assert_eq!(m.next(h), h.next());
+        assert_eq!(m.prev(h), h.prev());
+        assert_eq!(m.face(h), h.face());
+        assert_eq!(m.from_vertex(m.next(h)), m.to_vertex(h));
+        assert_eq!(
+            m.positions_m()[m.from_vertex(h).index()],
+            m.position(m.from_vertex(h))
+        );
+        per_halfedge[h] = m.edge_length_m(h);
+    }
+    // Opposite half-edges have the same length.
+    for h in m.halfedges() {
+        let o = m.opposite(h).unwrap_or(h);
+        assert_eq!(per_halfedge[h], per_halfedge[o]);
+    }
+    let per_corner: CornerData<f64> = CornerData::from_vec(
+        (0..m.num_corners() as u32)
+            .map(|c| m.corner_angle_rad(CornerId(c)))
+            .collect(),
+    );
+    // Angle defects sum to 2πχ = 4π on a closed genus-0 surface (discrete Gauss–Bonnet).
+    let defect: f64 = m
+        .vertices()
+        .map(|v| 2.0 * PI - m.vertex_corners(v).map(|c| per_corner[c]).sum::<f64>())
+        .sum();
+    assert!((defect - 4.0 * PI).abs() < 1e-9, "{defect}");
+}
