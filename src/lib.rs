@@ -38,7 +38,7 @@
 //! - Only `gltf_io` knows glTF. The decoder never touches the filesystem or the network: external
 //!   buffers and images are handed to it by the caller as named byte blobs.
 //! - Units are in names and types: model space is in the asset's units (`_m`, `_m2`), UVs are
-//!   normalized to [0,1], angles are in radians (`_rad`).
+//!   normalized to \[0,1\], angles are in radians (`_rad`).
 pub mod api;
 pub mod atlas;
 pub mod bench;
