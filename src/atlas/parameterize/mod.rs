@@ -28,7 +28,7 @@ pub(crate) mod test_meshes;
 use std::ops::ControlFlow;
 
 pub use chart::{ChartMesh, ChartTopology};
-pub use hlscm::{HlscmOptions, HlscmReport};
+pub use hlscm::{HlscmLevel, HlscmOptions, HlscmReport, HlscmSmoother};
 pub use lscm::{conformal_energy, flipped_faces, LscmSystem, Pin};
 
 use crate::numerics::{CgOptions, CholeskyError, SparseError};
