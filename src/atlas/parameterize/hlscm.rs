@@ -562,10 +562,17 @@ mod tests {
                 coarsest_max_vertices: 300,
                 ..HlscmOptions::default()
             };
-            let (uv, report) = solve_hlscm(&chart, &topo, &pins, &options, &mut |_| {
-                ControlFlow::Continue(())
-            })
-            .expect("hlscm");
+            let hierarchy = build_hierarchy(&chart, &topo, &pins, &options).expect("hierarchy");
+            let sizes = hierarchy.level_sizes();
+            assert_eq!(sizes.last(), Some(&chart.positions_m.len()));
+            // About `level_ratio` = 10 times more vertices per level (the paper's schedule).
+            for w in sizes.windows(2) {
+                let ratio = w[1] as f64 / w[0] as f64;
+                assert!((7.0..=13.0).contains(&ratio), "{sizes:?}");
+            }
+            let (uv, report) = hierarchy
+                .solve(&options, &mut |_| ControlFlow::Continue(()))
+                .expect("hlscm");
             assert!(report.levels.len() >= 2, "{report:?}");
             assert!(report.converged, "{report:?}");
             let e = conformal_energy(&chart, &uv);
