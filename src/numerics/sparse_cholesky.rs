@@ -6,11 +6,11 @@
 //! Architecture invariant: this is the ONLY file that names `faer`. faer is generic and heavy
 //! (~30% of a debug build); keeping every use here monomorphizes it once.
 //!
-//! Determinism: the numeric factorization and the solves run with [`faer::Par::Seq`]. Measured
-//! on this machine (see the test `parallel_factorization_matches_sequential_bits`): faer's
-//! rayon path gives the same bits on our LSCM systems, but the gain at the chart sizes routed
-//! to the direct solver is small and sequential execution is deterministic by construction, so
-//! we do not depend on faer's internal scheduling staying bit-stable across versions.
+//! Determinism: the numeric factorization and the solves run with [`faer::Par::Seq`]. faer's
+//! rayon path gave the same bits on the 3600-unknown grid system of the test
+//! `parallel_factorization_matches_sequential_bits`, but we have not proven it for every
+//! input, and sequential execution is deterministic by construction, so production uses it.
+//! (The direct solve still parallelizes across charts at the caller.)
 //!
 //! Units: none. Reference: faer 0.24 `sparse::linalg::cholesky` (symbolic analysis
 //! `factorize_symbolic_cholesky`, numeric `factorize_numeric_llt`, `LltRef::solve_in_place_with_conj`).

@@ -313,10 +313,18 @@ impl ChartTopology {
                 continue;
             }
             for &w in self.neighbors_of(v) {
-                let len = norm3(sub(positions_m[w as usize], positions_m[v as usize]));
-                let nd = d + len;
-                if nd < dist[w as usize] {
-                    dist[w as usize] = nd;
+                // `.get`: the topology is a public struct and may not match `positions_m`.
+                let (Some(&pw), Some(&pv)) =
+                    (positions_m.get(w as usize), positions_m.get(v as usize))
+                else {
+                    continue;
+                };
+                let nd = d + norm3(sub(pw, pv));
+                let Some(slot) = dist.get_mut(w as usize) else {
+                    continue;
+                };
+                if nd < *slot {
+                    *slot = nd;
                     heap.push(HeapEntry {
                         dist: nd,
                         vertex: w,
@@ -326,7 +334,7 @@ impl ChartTopology {
         }
         let mut best = (source, 0.0);
         for &v in &self.boundary_loop {
-            let d = dist[v as usize];
+            let d = dist.get(v as usize).copied().unwrap_or(f64::INFINITY);
             if d.is_finite() && (d > best.1 || (d == best.1 && v < best.0)) {
                 best = (v, d);
             }

@@ -103,6 +103,21 @@ impl LscmSystem {
         pins: &[Pin],
     ) -> Result<Self, ParameterizeError> {
         let n = chart.positions_m.len();
+        // The topology is a public struct: check it belongs to this chart before indexing.
+        let topology_fits = topology.neighbor_ptr.len() == n + 1
+            && topology.neighbor_ptr.last() == Some(&topology.neighbors.len())
+            && topology.neighbor_ptr.windows(2).all(|w| w[0] <= w[1])
+            && topology.neighbors.iter().all(|&w| (w as usize) < n)
+            && chart
+                .triangles
+                .iter()
+                .all(|t| t.iter().all(|&i| (i as usize) < n));
+        if !topology_fits {
+            return Err(ParameterizeError::Internal {
+                detail: "topology does not belong to this chart; use ChartMesh::validate"
+                    .to_string(),
+            });
+        }
         let mut free_index = vec![0u32; n];
         for pin in pins {
             match free_index.get_mut(pin.vertex as usize) {
@@ -563,6 +578,27 @@ mod tests {
         for (a, b) in uv.iter().zip(&uv_cg) {
             assert!((a[0] - b[0]).abs() < 1e-6 && (a[1] - b[1]).abs() < 1e-6);
         }
+    }
+
+    #[test]
+    fn foreign_topology_is_an_error_not_a_panic() {
+        let small = grid(2, 2, |x, y| [x, y, 0.0]);
+        let big = grid(4, 4, |x, y| [x, y, 0.0]);
+        let topo = small.validate().expect("disk");
+        let pins = [
+            Pin {
+                vertex: 0,
+                uv: [0.0, 0.0],
+            },
+            Pin {
+                vertex: 1,
+                uv: [1.0, 0.0],
+            },
+        ];
+        assert!(matches!(
+            LscmSystem::assemble(&big, &topo, &pins),
+            Err(ParameterizeError::Internal { .. })
+        ));
     }
 
     #[test]

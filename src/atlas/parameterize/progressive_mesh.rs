@@ -37,16 +37,18 @@
 //! "its textures coordinates … using a barycentric interpolation in the nearest triangle"
 //! (§4.1). [`ProgressiveMesh::level`] rebuilds the mesh after any prefix of the collapses.
 //!
-//! Queue: one entry per vertex (its cheapest valid half-edge). After a collapse, the kept
-//! vertex and its ring are re-queued with their last known priority and re-evaluated lazily
-//! when popped (re-queued if their priority rose), so the order is the paper's "least
-//! important first" up to that laziness.
+//! Queue: at most one entry per vertex (its cheapest valid half-edge). After a collapse, the
+//! kept vertex and its ring are queued (if not already) with their last known priority and
+//! re-evaluated lazily when popped (re-queued if their priority rose), so the order is the
+//! paper's "least important first" up to that laziness.
 //!
 //! Determinism: sequential; the priority queue orders by (priority, vertex id) with
 //! `f64::total_cmp`. Cost: `O(n log n)`; measured ~15 s for 450k collapses on this (loaded)
 //! 2-core machine, the dominant cost of HLSCM at 1M triangles.
 use std::collections::BinaryHeap;
 use std::f64::consts::PI;
+
+use rayon::prelude::*;
 
 use super::chart::{cross, dot3, exceeds, norm3, sub, ChartMesh};
 use super::ParameterizeError;
@@ -119,27 +121,42 @@ pub fn build_progressive_mesh(
     // re-evaluated when popped (most are touched several times before their turn, so this
     // saves most evaluations; a vertex whose priority rose is re-queued at pop time).
     let mut last_priority = vec![0.0f64; n];
-    for u in 0..n as u32 {
-        if let Some((priority, _)) = d.best_collapse(u) {
-            last_priority[u as usize] = priority;
+    // The first evaluation of every vertex reads the unmodified mesh only: run it in
+    // parallel (each result depends on its vertex alone, so the bits do not depend on the
+    // thread count), then queue sequentially in vertex order.
+    let first: Vec<Option<(f64, u32)>> = {
+        let d = &d;
+        (0..n as u32)
+            .into_par_iter()
+            .map_init(Scratch::default, |scratch, u| d.best_collapse(u, scratch))
+            .collect()
+    };
+    // At most one queue entry per vertex: a touched vertex that is already queued keeps its
+    // entry (it is re-evaluated when popped anyway), which keeps the heap small.
+    let mut queued = vec![false; n];
+    for (u, best) in first.into_iter().enumerate() {
+        if let Some((priority, _)) = best {
+            last_priority[u] = priority;
+            queued[u] = true;
             heap.push(Candidate {
                 priority,
-                vertex: u,
-                stamp: 0,
+                vertex: u as u32,
             });
         }
     }
+    let mut scratch = Scratch::default();
     let mut alive = n;
     let mut collapses = Vec::new();
     let mut touched: Vec<u32> = Vec::new();
     while alive > options.min_vertices.max(3) {
         let Some(c) = heap.pop() else { break };
         let u = c.vertex as usize;
-        if !d.alive[u] || d.stamp[u] != c.stamp {
+        queued[u] = false;
+        if !d.alive[u] {
             continue;
         }
         // Lazy re-evaluation: the neighbourhood may have changed since the push.
-        let Some((priority, v)) = d.best_collapse(c.vertex) else {
+        let Some((priority, v)) = d.best_collapse(c.vertex, &mut scratch) else {
             // No valid collapse now; if a later collapse nearby touches u, it comes back with
             // the current frontier priority.
             last_priority[u] = c.priority;
@@ -147,11 +164,10 @@ pub fn build_progressive_mesh(
         };
         last_priority[u] = priority;
         if priority > c.priority {
-            d.stamp[u] = d.stamp[u].wrapping_add(1);
+            queued[u] = true;
             heap.push(Candidate {
                 priority,
                 vertex: c.vertex,
-                stamp: d.stamp[u],
             });
             continue;
         }
@@ -164,14 +180,13 @@ pub fn build_progressive_mesh(
         d.ring(v, &mut touched);
         for &w in &touched {
             let w = w as usize;
-            if d.locked[w] {
+            if d.locked[w] || queued[w] {
                 continue;
             }
-            d.stamp[w] = d.stamp[w].wrapping_add(1);
+            queued[w] = true;
             heap.push(Candidate {
                 priority: last_priority[w],
                 vertex: w as u32,
-                stamp: d.stamp[w],
             });
         }
     }
@@ -279,7 +294,6 @@ fn internal(detail: &str) -> ParameterizeError {
 struct Candidate {
     priority: f64,
     vertex: u32,
-    stamp: u32,
 }
 impl Eq for Candidate {}
 impl Ord for Candidate {
@@ -297,6 +311,33 @@ impl PartialOrd for Candidate {
     }
 }
 
+/// Reusable buffers of [`Decimator::best_collapse`] (one per thread).
+#[derive(Default)]
+struct Scratch {
+    flat: Vec<u32>,
+    ring_u: Vec<(u32, usize)>,
+    ring_v: Vec<(u32, usize)>,
+    /// (priority, target, faces on the edge).
+    candidates: Vec<(f64, u32, usize)>,
+}
+
+/// Common entries of two rings sorted by vertex.
+fn count_common(a: &[(u32, usize)], b: &[(u32, usize)]) -> usize {
+    let (mut i, mut j, mut n) = (0, 0, 0);
+    while i < a.len() && j < b.len() {
+        match a[i].0.cmp(&b[j].0) {
+            std::cmp::Ordering::Less => i += 1,
+            std::cmp::Ordering::Greater => j += 1,
+            std::cmp::Ordering::Equal => {
+                n += 1;
+                i += 1;
+                j += 1;
+            }
+        }
+    }
+    n
+}
+
 /// The mutable mesh under decimation.
 struct Decimator<'a> {
     pos: &'a [[f64; 3]],
@@ -305,19 +346,8 @@ struct Decimator<'a> {
     alive: Vec<bool>,
     locked: Vec<bool>,
     accumulated_m: Vec<f64>,
-    stamp: Vec<u32>,
     boundary_vertices: usize,
     max_defect_rad: f64,
-    ring_u: Vec<u32>,
-    ring_counts: Vec<(u32, usize)>,
-    /// Candidate buffer of `best_collapse`: (priority, target, faces on the edge).
-    candidates: Vec<(f64, u32, usize)>,
-    /// Link-condition marks: `in_ring_u[w] == ring_epoch` iff `w` is in the current `u`'s ring;
-    /// `seen[w] == seen_epoch` iff `w` was already counted for the current candidate.
-    in_ring_u: Vec<u32>,
-    ring_epoch: u32,
-    seen: Vec<u32>,
-    seen_epoch: u32,
 }
 
 impl<'a> Decimator<'a> {
@@ -349,16 +379,8 @@ impl<'a> Decimator<'a> {
             alive: vec![true; n],
             locked: lock,
             accumulated_m: vec![0.0; n],
-            stamp: vec![0; n],
             boundary_vertices: 0,
             max_defect_rad: options.max_angular_defect_rad,
-            ring_u: Vec::new(),
-            ring_counts: Vec::new(),
-            candidates: Vec::new(),
-            in_ring_u: vec![0; n],
-            ring_epoch: 0,
-            seen: vec![0; n],
-            seen_epoch: 0,
         };
         let mut ring = Vec::new();
         for u in 0..n as u32 {
@@ -414,15 +436,18 @@ impl<'a> Decimator<'a> {
     }
 
     /// The cheapest valid collapse `u → v` and its priority, or `None`.
-    fn best_collapse(&mut self, u: u32) -> Option<(f64, u32)> {
+    fn best_collapse(&self, u: u32, scratch: &mut Scratch) -> Option<(f64, u32)> {
         let ui = u as usize;
         if !self.alive[ui] || self.locked[ui] || self.vertex_faces[ui].is_empty() {
             return None;
         }
-        let mut scratch = std::mem::take(&mut self.ring_u);
-        let mut ring_u = std::mem::take(&mut self.ring_counts);
-        self.ring_with_counts(u, &mut scratch, &mut ring_u);
-        self.ring_u = scratch;
+        let Scratch {
+            flat,
+            ring_u,
+            ring_v,
+            candidates,
+        } = scratch;
+        self.ring_with_counts(u, flat, ring_u);
         let boundary_u = ring_u.len() != self.vertex_faces[ui].len();
         // The other boundary neighbour, for the boundary area term (first with one face).
         let boundary_neighbors: [Option<u32>; 2] = {
@@ -442,10 +467,9 @@ impl<'a> Decimator<'a> {
         let defect = if boundary_u { PI } else { 2.0 * PI } - angle_sum;
         // Cost every candidate first (cheap), then check the link condition in order of
         // cost: it rarely fails, so usually only the cheapest candidate pays for it.
-        let mut candidates = std::mem::take(&mut self.candidates);
         candidates.clear();
         if defect.abs() <= self.max_defect_rad && (!boundary_u || self.boundary_vertices > 4) {
-            for &(v, on_edge) in &ring_u {
+            for &(v, on_edge) in ring_u.iter() {
                 if boundary_u && on_edge != 1 {
                     continue; // a boundary vertex only slides along the boundary
                 }
@@ -463,52 +487,20 @@ impl<'a> Decimator<'a> {
                 candidates.push((loss + self.accumulated_m[ui], v, on_edge));
             }
         }
-        let mut best = None;
-        if !candidates.is_empty() {
-            if self.ring_epoch == u32::MAX {
-                self.in_ring_u.iter_mut().for_each(|m| *m = 0);
-                self.ring_epoch = 0;
-            }
-            self.ring_epoch += 1;
-            for &(w, _) in &ring_u {
-                self.in_ring_u[w as usize] = self.ring_epoch;
-            }
-            // Cheapest first (ties: smaller vertex), removing each candidate once tried.
-            while let Some(k) = (0..candidates.len()).min_by(|&a, &b| {
-                let (ca, cb) = (&candidates[a], &candidates[b]);
-                ca.0.total_cmp(&cb.0).then(ca.1.cmp(&cb.1))
-            }) {
-                let (priority, v, on_edge) = candidates.swap_remove(k);
-                // Link condition: the common neighbours of u and v are exactly the opposite
-                // vertices of the faces on the edge, otherwise the mesh becomes non-manifold.
-                if self.seen_epoch == u32::MAX {
-                    // About to wrap: old marks could alias new epochs; clear them.
-                    self.seen.iter_mut().for_each(|m| *m = 0);
-                    self.seen_epoch = 0;
-                }
-                self.seen_epoch += 1;
-                let mut common = 0usize;
-                for &f in &self.vertex_faces[v as usize] {
-                    for &w in &self.faces[f as usize] {
-                        let wi = w as usize;
-                        if w != v
-                            && self.in_ring_u[wi] == self.ring_epoch
-                            && self.seen[wi] != self.seen_epoch
-                        {
-                            self.seen[wi] = self.seen_epoch;
-                            common += 1;
-                        }
-                    }
-                }
-                if common == on_edge {
-                    best = Some((priority, v));
-                    break;
-                }
+        // Cheapest first (ties: smaller vertex), removing each candidate once tried.
+        while let Some(k) = (0..candidates.len()).min_by(|&a, &b| {
+            let (ca, cb) = (&candidates[a], &candidates[b]);
+            ca.0.total_cmp(&cb.0).then(ca.1.cmp(&cb.1))
+        }) {
+            let (priority, v, on_edge) = candidates.swap_remove(k);
+            // Link condition: the common neighbours of u and v are exactly the opposite
+            // vertices of the faces on the edge, otherwise the mesh becomes non-manifold.
+            self.ring_with_counts(v, flat, ring_v);
+            if count_common(ring_u, ring_v) == on_edge {
+                return Some((priority, v));
             }
         }
-        self.candidates = candidates;
-        self.ring_counts = ring_u;
-        best
+        None
     }
 
     /// Geometric loss of `u → v` (volume and boundary-area terms, as lengths), or `None` if a
