@@ -135,7 +135,12 @@ pub struct TimingsJson {
 
 impl InspectJson {
     /// The JSON form of `report` for `file` (`file_bytes` long), with the measured timings.
-    pub fn new(file: String, file_bytes: u64, report: &InspectReport, timings: TimingsJson) -> Self {
+    pub fn new(
+        file: String,
+        file_bytes: u64,
+        report: &InspectReport,
+        timings: TimingsJson,
+    ) -> Self {
         let (surface, surface_error) = match &report.surface {
             Ok(surface) => (Some(SurfaceJson::from(surface)), None),
             Err(err) => (

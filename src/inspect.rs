@@ -81,14 +81,23 @@ mod tests {
 
     #[test]
     fn box_fixture_is_one_closed_genus_zero_component() {
-        let bytes = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/Box.glb"))
-            .expect("fixture");
+        let bytes = std::fs::read(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/fixtures/Box.glb"
+        ))
+        .expect("fixture");
         let asset = decode(&bytes, &Resources::new(), &DecodeLimits::default()).expect("decode");
         let report = inspect(&asset);
         assert_eq!(report.triangles, 12);
-        assert_eq!(report.source_vertices, 24, "Box splits its 8 corners per face normal");
+        assert_eq!(
+            report.source_vertices, 24,
+            "Box splits its 8 corners per face normal"
+        );
         let surface = report.surface.expect("surface");
-        assert_eq!(surface.welded_vertices, 8, "welding by position recovers the 8 corners");
+        assert_eq!(
+            surface.welded_vertices, 8,
+            "welding by position recovers the 8 corners"
+        );
         assert_eq!(surface.mesh_vertices, 8, "nothing to repair");
         assert_eq!(surface.edges, 18);
         assert_eq!(surface.boundary_loops, 0);

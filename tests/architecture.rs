@@ -75,14 +75,20 @@ fn violations(module: &str, allowed_crate_modules: &[&str]) -> Vec<String> {
         for (line_no, code) in code_lines(file) {
             for word in CORE_FORBIDDEN {
                 if code.contains(word) {
-                    found.push(format!("{}:{line_no}: uses `{word}`: {}", file.display(), code.trim()));
+                    found.push(format!(
+                        "{}:{line_no}: uses `{word}`: {}",
+                        file.display(),
+                        code.trim()
+                    ));
                 }
             }
             let mut rest = code.as_str();
             while let Some(pos) = rest.find("crate::") {
                 let after = &rest[pos + "crate::".len()..];
-                let name: String =
-                    after.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+                let name: String = after
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect();
                 let own = name == module;
                 if !own && !allowed_crate_modules.contains(&name.as_str()) && !name.is_empty() {
                     found.push(format!(
@@ -121,5 +127,8 @@ fn the_checker_catches_a_violation() {
     // The checker must be able to fail: `gltf_io` legitimately uses serde and names `crate::mesh`,
     // so checking it as if it were core must report something.
     let v = violations("gltf_io", &[]);
-    assert!(!v.is_empty(), "the architecture checker found nothing in gltf_io; is it reading files?");
+    assert!(
+        !v.is_empty(),
+        "the architecture checker found nothing in gltf_io; is it reading files?"
+    );
 }

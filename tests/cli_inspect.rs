@@ -3,7 +3,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(name)
 }
 
 fn texatlas(args: &[&str]) -> Output {
@@ -35,7 +37,10 @@ fn inspect_json(path: &Path) -> serde_json::Value {
     assert!(out.status.success(), "inspect failed: {}", stderr(&out));
     let json: serde_json::Value = serde_json::from_str(&stdout(&out)).expect("stdout is JSON");
     let errors: Vec<String> = schema().iter_errors(&json).map(|e| e.to_string()).collect();
-    assert!(errors.is_empty(), "output violates proto/inspect.schema.json: {errors:#?}");
+    assert!(
+        errors.is_empty(),
+        "output violates proto/inspect.schema.json: {errors:#?}"
+    );
     json
 }
 
@@ -43,7 +48,8 @@ fn inspect_json(path: &Path) -> serde_json::Value {
 fn split_glb(glb: &[u8]) -> (serde_json::Value, Vec<u8>) {
     let u32_at = |o: usize| u32::from_le_bytes(glb[o..o + 4].try_into().expect("4 bytes")) as usize;
     let json_len = u32_at(12);
-    let json: serde_json::Value = serde_json::from_slice(&glb[20..20 + json_len]).expect("json chunk");
+    let json: serde_json::Value =
+        serde_json::from_slice(&glb[20..20 + json_len]).expect("json chunk");
     let bin_start = 20 + json_len;
     let bin_len = u32_at(bin_start);
     (json, glb[bin_start + 8..bin_start + 8 + bin_len].to_vec())
@@ -96,10 +102,17 @@ fn every_fixture_inspects_and_matches_the_schema() {
     entries.sort();
     for path in entries {
         let json = inspect_json(&path);
-        assert!(json["triangles"].as_u64().expect("triangles") > 0, "{}", path.display());
+        assert!(
+            json["triangles"].as_u64().expect("triangles") > 0,
+            "{}",
+            path.display()
+        );
         seen += 1;
     }
-    assert!(seen >= 5, "expected the Khronos fixtures in tests/fixtures, found {seen}");
+    assert!(
+        seen >= 5,
+        "expected the Khronos fixtures in tests/fixtures, found {seen}"
+    );
 }
 
 #[test]
@@ -123,7 +136,10 @@ fn escaping_uris_are_refused_and_nothing_outside_is_opened() {
         let out = texatlas(&["inspect", path.to_str().expect("path")]);
         assert_eq!(out.status.code(), Some(2), "uri {uri}: {}", stdout(&out));
         let err = stderr(&out);
-        assert!(err.contains("/buffers/0/uri"), "uri {uri}: error must name the JSON path: {err}");
+        assert!(
+            err.contains("/buffers/0/uri"),
+            "uri {uri}: error must name the JSON path: {err}"
+        );
     }
 }
 
@@ -132,20 +148,31 @@ fn escaping_uris_are_refused_and_nothing_outside_is_opened() {
 fn a_symlink_out_of_the_directory_is_not_followed() {
     let path = gltf_with_external_buffer("symlink", "link.bin");
     let dir = path.parent().expect("dir");
-    let outside = dir.parent().expect("parent").join(format!("texatlas-outside-{}.bin", std::process::id()));
+    let outside = dir
+        .parent()
+        .expect("parent")
+        .join(format!("texatlas-outside-{}.bin", std::process::id()));
     std::fs::copy(dir.join("box.bin"), &outside).expect("copy");
     std::os::unix::fs::symlink(&outside, dir.join("link.bin")).expect("symlink");
     let out = texatlas(&["inspect", path.to_str().expect("path")]);
     let _ = std::fs::remove_file(&outside);
     assert_eq!(out.status.code(), Some(2), "{}", stdout(&out));
-    assert!(stderr(&out).contains("resource_missing"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("resource_missing"),
+        "{}",
+        stderr(&out)
+    );
 }
 
 #[test]
 fn a_missing_file_is_a_clear_error() {
     let out = texatlas(&["inspect", "/nonexistent/texatlas/asset.glb"]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(stderr(&out).contains("/nonexistent/texatlas/asset.glb"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("/nonexistent/texatlas/asset.glb"),
+        "{}",
+        stderr(&out)
+    );
 }
 
 #[test]

@@ -34,7 +34,10 @@ pub fn run(args: &InspectArgs) -> anyhow::Result<ExitCode> {
     let file = args.file.display().to_string();
     if args.json {
         let json = InspectJson::new(file, loaded.file_bytes, &report, timings);
-        println!("{}", serde_json::to_string_pretty(&json).context("serialising the report")?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&json).context("serialising the report")?
+        );
     } else {
         print!("{}", text(&args.file, loaded.file_bytes, &report, timings));
     }
@@ -44,7 +47,12 @@ pub fn run(args: &InspectArgs) -> anyhow::Result<ExitCode> {
 fn text(file: &Path, file_bytes: u64, report: &InspectReport, timings: TimingsJson) -> String {
     let mut out = String::new();
     let a = &report.asset;
-    let _ = writeln!(out, "file: {} ({file_bytes} bytes, {:?})", file.display(), a.format);
+    let _ = writeln!(
+        out,
+        "file: {} ({file_bytes} bytes, {:?})",
+        file.display(),
+        a.format
+    );
     let _ = writeln!(
         out,
         "meshes: {}, nodes: {}, triangles: {}, vertices before welding: {}",
@@ -57,13 +65,20 @@ fn text(file: &Path, file_bytes: u64, report: &InspectReport, timings: TimingsJs
         let _ = writeln!(out, "extensionsUsed: {}", a.extensions_used.join(", "));
     }
     if !a.extensions_required.is_empty() {
-        let _ = writeln!(out, "extensionsRequired: {}", a.extensions_required.join(", "));
+        let _ = writeln!(
+            out,
+            "extensionsRequired: {}",
+            a.extensions_required.join(", ")
+        );
     }
     for (m, mesh) in a.meshes.iter().enumerate() {
         let _ = writeln!(
             out,
             "mesh {m}{}: {} primitive(s), {} instance(s)",
-            mesh.name.as_deref().map(|n| format!(" \"{n}\"")).unwrap_or_default(),
+            mesh.name
+                .as_deref()
+                .map(|n| format!(" \"{n}\""))
+                .unwrap_or_default(),
             mesh.primitives.len(),
             mesh.instances
         );
@@ -106,7 +121,9 @@ fn text(file: &Path, file_bytes: u64, report: &InspectReport, timings: TimingsJs
                     out,
                     "  component {}: mesh {}, F={} V={} E={} boundary loops={} χ={} genus={}",
                     c.id.index(),
-                    c.weld_group.map(|g| g.to_string()).unwrap_or_else(|| "?".into()),
+                    c.weld_group
+                        .map(|g| g.to_string())
+                        .unwrap_or_else(|| "?".into()),
                     c.num_faces,
                     c.num_vertices,
                     c.num_edges,
