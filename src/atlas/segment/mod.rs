@@ -34,6 +34,7 @@
 pub mod features;
 pub mod grow;
 pub mod options;
+pub mod validate;
 
 #[cfg(test)]
 mod tests;
@@ -46,6 +47,7 @@ use crate::mesh::{FaceData, FaceId, HalfedgeId, TriangleMesh, VertexId};
 pub use features::{detect_features, Features};
 pub use grow::{distance_to_features, grow_charts, GrownCharts};
 pub use options::{Lscm2002Options, SegmentMethod, SegmentOptions};
+pub use validate::{validate_charts, ChartDefect, ValidateOptions, ValidatedCharts};
 
 /// A chart of a [`Segmentation`], numbered by its lowest face id. Displayed as `C3`.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Debug)]
@@ -185,7 +187,15 @@ pub fn segment_charts(
             grown.face_chart
         }
     };
-    let mut charts = enforce_disks(mesh, &proposed, &mut stats);
+    let mut work: Vec<Vec<FaceId>> = Vec::new();
+    for f in mesh.faces() {
+        let c = proposed[f.index()] as usize;
+        if work.len() <= c {
+            work.resize(c + 1, Vec::new());
+        }
+        work[c].push(f);
+    }
+    let mut charts = enforce_disks(mesh, work, &mut stats);
     if let Some(cap) = options.max_charts {
         stats.cap_merges = merge_to_cap(mesh, &mut charts, cap);
     }
@@ -193,7 +203,11 @@ pub fn segment_charts(
 }
 
 /// Sorts charts by lowest face, builds the face → chart map, asserts the contract in debug.
-fn finish(mesh: &TriangleMesh, mut charts: Vec<Vec<FaceId>>, stats: SegmentStats) -> Segmentation {
+pub(super) fn finish(
+    mesh: &TriangleMesh,
+    mut charts: Vec<Vec<FaceId>>,
+    stats: SegmentStats,
+) -> Segmentation {
     for c in &mut charts {
         c.sort_unstable();
     }
@@ -237,7 +251,7 @@ pub fn check_chart_is_disk(mesh: &TriangleMesh, faces: &[FaceId]) -> Result<Disk
 }
 
 /// [`check_chart_is_disk`] with a membership test; `faces` must be distinct and in range.
-fn disk_check(
+pub(super) fn disk_check(
     mesh: &TriangleMesh,
     faces: &[FaceId],
     inside: &dyn Fn(FaceId) -> bool,
@@ -347,22 +361,23 @@ fn flood(mesh: &TriangleMesh, seeds: &[FaceId], inside: &dyn Fn(FaceId) -> bool)
     order
 }
 
-/// Splits each proposed chart into glued components and each non-disk component into two
+/// Splits each proposed chart (faces ascending, charts disjoint) into glued components and each non-disk component into two
 /// re-grown halves until every chart is a disk (see the module doc).
-fn enforce_disks(
+pub(super) fn enforce_disks(
     mesh: &TriangleMesh,
-    proposed: &[u32],
+    work: Vec<Vec<FaceId>>,
     stats: &mut SegmentStats,
 ) -> Vec<Vec<FaceId>> {
     let nf = mesh.num_faces();
-    let num_proposed = proposed.iter().map(|&c| c as usize + 1).max().unwrap_or(0);
-    let mut work: Vec<Vec<FaceId>> = vec![Vec::new(); num_proposed];
-    for f in mesh.faces() {
-        work[proposed[f.index()] as usize].push(f);
+    // `label[f]` is the work item currently holding `f`: O(1) membership for every check. Faces
+    // in no item keep `u32::MAX`.
+    let mut label: Vec<u32> = vec![u32::MAX; nf];
+    for (i, item) in work.iter().enumerate() {
+        for f in item {
+            label[f.index()] = i as u32;
+        }
     }
-    // `label[f]` is the work item currently holding `f`: O(1) membership for every check.
-    let mut label: Vec<u32> = proposed.to_vec();
-    let mut next_label = num_proposed as u32;
+    let mut next_label = work.len() as u32;
     let mut done: Vec<Vec<FaceId>> = Vec::new();
     let mut pending: Vec<(u32, Vec<FaceId>)> = work
         .into_iter()
@@ -371,6 +386,7 @@ fn enforce_disks(
         .collect();
     pending.reverse();
     let max_splits = nf;
+    let splits_before = stats.disk_splits;
     while let Some((id, faces)) = pending.pop() {
         if faces.is_empty() {
             continue;
@@ -403,7 +419,7 @@ fn enforce_disks(
             done.push(faces);
             continue;
         }
-        if stats.disk_splits >= max_splits {
+        if stats.disk_splits - splits_before >= max_splits {
             // Unreachable in theory (see the module doc); a triangle is always a disk.
             done.extend(faces.iter().map(|&f| vec![f]));
             continue;
@@ -434,8 +450,20 @@ fn split_in_two(
 ) -> (Vec<FaceId>, Vec<FaceId>) {
     let a = *flood(mesh, &faces[..1], inside).last().unwrap_or(&faces[0]);
     let b = *flood(mesh, &[a], inside).last().unwrap_or(&a);
+    grow_two(mesh, faces, inside, a, b)
+}
+
+/// Grows two charts from faces `a` and `b` of a connected chart, breadth-first and one layer at a
+/// time, so both parts are connected; `a == b` returns the chart whole and an empty part.
+/// Faces unreachable from `a` and `b` (only if the chart is disconnected) join part `a`.
+pub(super) fn grow_two(
+    mesh: &TriangleMesh,
+    faces: &[FaceId],
+    inside: &dyn Fn(FaceId) -> bool,
+    a: FaceId,
+    b: FaceId,
+) -> (Vec<FaceId>, Vec<FaceId>) {
     if a == b {
-        // One face: nothing to split (a single triangle is a disk, so this is not reached).
         return (faces.to_vec(), Vec::new());
     }
     let mut side: std::collections::BTreeMap<FaceId, bool> = std::collections::BTreeMap::new();
@@ -451,8 +479,10 @@ fn split_in_two(
             }
         }
     }
-    let half_a = side.iter().filter(|(_, &s)| !s).map(|(&f, _)| f).collect();
+    let mut half_a: Vec<FaceId> = side.iter().filter(|(_, &s)| !s).map(|(&f, _)| f).collect();
     let half_b = side.iter().filter(|(_, &s)| s).map(|(&f, _)| f).collect();
+    half_a.extend(faces.iter().filter(|f| !side.contains_key(f)));
+    half_a.sort_unstable();
     (half_a, half_b)
 }
 

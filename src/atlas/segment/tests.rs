@@ -549,3 +549,168 @@ proptest! {
         assert_contract(&mesh, &seg);
     }
 }
+
+/// A helical ramp: `turns` turns of an annulus strip between radii 1 and 2, rising by `rise_m`
+/// per turn. Almost planar, so its conformal flattening is close to an annulus sector of
+/// `turns · 360°`, which overlaps itself when `turns > 1`.
+fn helix_strip(turns: f64, n_around: u32, n_across: u32, rise_m: f64) -> MeshInput {
+    let mut positions = Vec::new();
+    for i in 0..=n_around {
+        let t = turns * f64::from(i) / f64::from(n_around);
+        let a = 2.0 * std::f64::consts::PI * t;
+        for j in 0..=n_across {
+            let r = 1.0 + f64::from(j) / f64::from(n_across);
+            positions.push([r * a.cos(), r * a.sin(), rise_m * t]);
+        }
+    }
+    let id = |i: u32, j: u32| i * (n_across + 1) + j;
+    let mut tris = Vec::new();
+    for i in 0..n_around {
+        for j in 0..n_across {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            tris.push([a, c, b]);
+            tris.push([a, d, c]);
+        }
+    }
+    MeshInput::single_group(positions, tris)
+}
+
+/// Brute force over all pairs of non-adjacent boundary edges: independent of the grid.
+fn brute_force_crossing(cm: &crate::atlas::parameterize::ChartMesh, uv: &[[f64; 2]]) -> bool {
+    let mut directed = Vec::new();
+    for t in &cm.triangles {
+        for s in 0..3 {
+            directed.push((t[s], t[(s + 1) % 3]));
+        }
+    }
+    let set: std::collections::BTreeSet<(u32, u32)> = directed.iter().copied().collect();
+    let segs: Vec<(u32, u32)> = directed
+        .into_iter()
+        .filter(|&(a, b)| !set.contains(&(b, a)))
+        .collect();
+    let o = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
+        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    };
+    for (i, &(a, b)) in segs.iter().enumerate() {
+        for &(c, d) in &segs[i + 1..] {
+            if a == c || a == d || b == c || b == d {
+                continue;
+            }
+            let (pa, pb, pc, pd) = (
+                uv[a as usize],
+                uv[b as usize],
+                uv[c as usize],
+                uv[d as usize],
+            );
+            if o(pa, pb, pc) * o(pa, pb, pd) < 0.0 && o(pc, pd, pa) * o(pc, pd, pb) < 0.0 {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+fn area_ratio(cm: &crate::atlas::parameterize::ChartMesh, uv: &[[f64; 2]]) -> f64 {
+    let mut lo = f64::INFINITY;
+    let mut hi = 0.0f64;
+    for t in &cm.triangles {
+        let [a, b, c] = t.map(|i| cm.positions_m[i as usize]);
+        let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let ac = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        // Heron-free: |ab|²|ac|² − (ab·ac)² = |ab × ac|².
+        let dot = ab[0] * ac[0] + ab[1] * ac[1] + ab[2] * ac[2];
+        let n2 = (ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2])
+            * (ac[0] * ac[0] + ac[1] * ac[1] + ac[2] * ac[2]);
+        let a3 = 0.5 * (n2 - dot * dot).max(0.0).sqrt();
+        let [p, q, r] = t.map(|i| uv[i as usize]);
+        let a2 = 0.5 * ((q[0] - p[0]) * (r[1] - p[1]) - (r[0] - p[0]) * (q[1] - p[1]));
+        lo = lo.min(a3 / a2);
+        hi = hi.max(a3 / a2);
+    }
+    hi / lo
+}
+
+#[test]
+fn validation_splits_a_self_overlapping_helix_strip() {
+    let mesh = build(&helix_strip(1.6, 96, 4, 0.05));
+    let all: Vec<FaceId> = mesh.faces().collect();
+    let one = finish(&mesh, vec![all.clone()], SegmentStats::default());
+    // The whole strip, flattened, overlaps itself (checked by brute force).
+    let (cm, _) = chart_mesh(&mesh, &all);
+    let map = crate::atlas::parameterize::parameterize_chart(&cm, &Default::default())
+        .expect("the strip is a disk");
+    assert!(
+        brute_force_crossing(&cm, &map.uv),
+        "test premise: the strip overlaps"
+    );
+    assert!(validate::boundary_crossing(&cm, &map.uv).is_some());
+    let opts = ValidateOptions {
+        max_area_ratio: None,
+        ..Default::default()
+    };
+    let v = validate_charts(&mesh, &one, &opts).expect("valid options");
+    assert!(v.splits[1] >= 1, "{:?}", v.splits);
+    assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
+    assert_contract(&mesh, &v.segmentation);
+    for (c, m) in v.segmentation.charts.iter().zip(&v.maps) {
+        let (cm, _) = chart_mesh(&mesh, c);
+        let (map, _) = m.as_ref().expect("parameterized");
+        assert!(map.flipped_faces.is_empty());
+        assert!(!brute_force_crossing(&cm, &map.uv));
+    }
+}
+
+#[test]
+fn validation_bounds_the_area_ratio() {
+    // A hemisphere flattened conformally shrinks its rim relative to its pole by far more than 2.
+    let mesh = build(&fixtures::uv_sphere(16, 24, 1.0));
+    let north: Vec<FaceId> = mesh
+        .faces()
+        .filter(|&f| mesh.face_positions(f).iter().all(|p| p[2] >= -1e-12))
+        .collect();
+    let south: Vec<FaceId> = mesh
+        .faces()
+        .filter(|f| north.binary_search(f).is_err())
+        .collect();
+    let seg = finish(&mesh, vec![north.clone(), south], SegmentStats::default());
+    let (cm, _) = chart_mesh(&mesh, &north);
+    let map = crate::atlas::parameterize::parameterize_chart(&cm, &Default::default())
+        .expect("a hemisphere is a disk");
+    assert!(area_ratio(&cm, &map.uv) > 2.0, "test premise");
+    let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid options");
+    assert!(v.splits[2] >= 2, "{:?}", v.splits);
+    assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
+    assert_contract(&mesh, &v.segmentation);
+    for (c, m) in v.segmentation.charts.iter().zip(&v.maps) {
+        let (cm, _) = chart_mesh(&mesh, c);
+        let (map, _) = m.as_ref().expect("parameterized");
+        let r = area_ratio(&cm, &map.uv);
+        assert!(r <= 2.0 + 1e-9, "chart of {} faces has ratio {r}", c.len());
+    }
+}
+
+#[test]
+fn validation_reports_unparameterizable_charts_and_rejects_bad_ratio() {
+    let mesh = build(&fixtures::degenerate());
+    let seg = segment(&mesh);
+    let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid");
+    assert_contract(&mesh, &v.segmentation);
+    // Face 2 is zero-area: its chart cannot be flattened and is reported, not dropped.
+    let c2 = v.segmentation.face_chart[FaceId(2)].index();
+    assert!(v
+        .unresolved
+        .iter()
+        .any(|(c, d)| *c == c2 && matches!(d, ChartDefect::Unparameterizable(_))));
+    assert!(v.maps[c2].is_none());
+    let bad = ValidateOptions {
+        max_area_ratio: Some(0.5),
+        ..Default::default()
+    };
+    assert!(matches!(
+        validate_charts(&mesh, &seg, &bad),
+        Err(SegmentError::InvalidOption {
+            option: "max_area_ratio",
+            ..
+        })
+    ));
+}
