@@ -47,7 +47,7 @@ use crate::mesh::{FaceData, FaceId, HalfedgeId, TriangleMesh, VertexId};
 pub use features::{detect_features, Features};
 pub use grow::{distance_to_features, grow_charts, GrownCharts};
 pub use options::{Lscm2002Options, SegmentMethod, SegmentOptions};
-pub use validate::{validate_charts, ChartDefect, ValidateOptions, ValidatedCharts};
+pub use validate::{validate_charts, ChartDefect, LocatedMap, ValidateOptions, ValidatedCharts};
 
 /// A chart of a [`Segmentation`], numbered by its lowest face id. Displayed as `C3`.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Debug)]

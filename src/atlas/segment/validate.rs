@@ -89,6 +89,9 @@ pub enum ChartDefect {
     Unparameterizable(ParameterizeError),
 }
 
+/// A chart's map and its local → global vertex map (from [`chart_mesh`]).
+pub type LocatedMap = (ChartMap, Vec<crate::mesh::VertexId>);
+
 /// The validated charts and their maps.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ValidatedCharts {
@@ -96,7 +99,7 @@ pub struct ValidatedCharts {
     pub segmentation: Segmentation,
     /// The map of each chart (same order as `segmentation.charts`), with the local → global
     /// vertex map of [`chart_mesh`]; `None` for a chart that could not be parameterized.
-    pub maps: Vec<Option<(ChartMap, Vec<crate::mesh::VertexId>)>>,
+    pub maps: Vec<Option<LocatedMap>>,
     /// Charts returned although not valid: chart index and why.
     pub unresolved: Vec<(usize, ChartDefect)>,
     /// Splits made, by cause: flips, overlaps, area ratio.
@@ -122,7 +125,7 @@ pub fn validate_charts(
     }
     let mut stats: SegmentStats = seg.stats;
     let mut pending: Vec<Vec<FaceId>> = seg.charts.iter().rev().cloned().collect();
-    let mut done: Vec<(Vec<FaceId>, Option<(ChartMap, Vec<crate::mesh::VertexId>)>)> = Vec::new();
+    let mut done: Vec<(Vec<FaceId>, Option<LocatedMap>)> = Vec::new();
     let mut unresolved_faces: Vec<(FaceId, ChartDefect)> = Vec::new();
     let mut splits = [0usize; 3];
     let mut label = vec![u32::MAX; mesh.num_faces()];
