@@ -1,11 +1,15 @@
 //! Segmentation over the shared corpus (`../shared/corpus`, or `$TEXATLAS_CORPUS`), when present:
 //! every chart of every mesh is a disk, every face is in one chart; prints per mesh the chart
 //! count, the time and the largest chart in faces. `#[ignore]`d: run it with
-//! `cargo test --test segment_corpus -- --ignored --nocapture` (it skips when the corpus is absent).
+//! `cargo test --test segment_corpus -- --ignored --nocapture` (it skips when the corpus is absent);
+//! with `TEXATLAS_SEGMENT_VALIDATE=1` it also runs chart validation (§3.3) and prints its figures.
 use std::path::PathBuf;
 use std::time::Instant;
 
-use texatlas::atlas::segment::{check_chart_is_disk, segment_charts, SegmentOptions};
+use texatlas::atlas::segment::{
+    check_chart_is_disk, segment_charts, validate_charts, ChartDefect, SegmentOptions,
+    ValidateOptions,
+};
 use texatlas::gltf_io::{decode, DecodeLimits, Resources};
 use texatlas::mesh::TriangleMesh;
 
@@ -66,6 +70,57 @@ fn segment_every_corpus_mesh() {
         }
         if seen.iter().any(|&n| n != 1) {
             failures.push(format!("{name}: a face is not in exactly one chart"));
+        }
+        if std::env::var_os("TEXATLAS_SEGMENT_VALIDATE").is_some() {
+            let t = Instant::now();
+            let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid");
+            let ms = t.elapsed().as_secs_f64() * 1e3;
+            let largest = v
+                .segmentation
+                .charts
+                .iter()
+                .map(Vec::len)
+                .max()
+                .unwrap_or(0);
+            let flips: usize = v
+                .maps
+                .iter()
+                .flatten()
+                .map(|(m, _)| m.flipped_faces.len())
+                .sum();
+            println!(
+                "  validated: charts {:5} largest {:7} time {ms:8.1} ms splits(flip,overlap,area) {:?} unresolved {} flips {flips}",
+                v.segmentation.num_charts(),
+                largest,
+                v.splits,
+                v.unresolved.len()
+            );
+            let mut kinds: std::collections::BTreeMap<String, usize> = Default::default();
+            for (_, d) in &v.unresolved {
+                let k = format!("{d:?}");
+                let k = k.split(['(', ' ', '{']).next().unwrap_or("?").to_owned();
+                let k = match d {
+                    ChartDefect::Unparameterizable(e) => {
+                        format!(
+                            "{k}:{}",
+                            format!("{e:?}")
+                                .split([' ', '{', '('])
+                                .next()
+                                .unwrap_or("?")
+                        )
+                    }
+                    _ => k,
+                };
+                *kinds.entry(k).or_default() += 1;
+            }
+            if !kinds.is_empty() {
+                println!("  unresolved by kind: {kinds:?}");
+            }
+            for (i, c) in v.segmentation.charts.iter().enumerate() {
+                if let Err(e) = check_chart_is_disk(&mesh, c) {
+                    failures.push(format!("{name}: validated chart {i}: {e}"));
+                }
+            }
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
