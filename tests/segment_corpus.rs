@@ -1,4 +1,5 @@
-//! Segmentation over the shared corpus (`../shared/corpus`, or `$TEXATLAS_CORPUS`), when present:
+//! Segmentation over the shared corpus (`$TEXATLAS_CORPUS`, `$TEXATLAS_SHARED_DIR/corpus`,
+//! `../shared/corpus` or `../../shared/corpus`), when present:
 //! every chart of every mesh is a disk, every face is in one chart; prints per mesh the chart
 //! count, the time and the largest chart in faces. `#[ignore]`d: run it with
 //! `cargo test --test segment_corpus -- --ignored --nocapture` (it skips when the corpus is absent);
@@ -14,10 +15,19 @@ use texatlas::gltf_io::{decode, DecodeLimits, Resources};
 use texatlas::mesh::TriangleMesh;
 
 fn corpus_dir() -> PathBuf {
-    std::env::var_os("TEXATLAS_CORPUS").map_or_else(
-        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/corpus"),
-        PathBuf::from,
-    )
+    // `.ci/run` puts `shared/` beside the clone (`../shared`); worktrees sit one level deeper.
+    let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let candidates = [
+        std::env::var_os("TEXATLAS_CORPUS").map(PathBuf::from),
+        std::env::var_os("TEXATLAS_SHARED_DIR").map(|d| PathBuf::from(d).join("corpus")),
+        Some(manifest.join("../shared/corpus")),
+        Some(manifest.join("../../shared/corpus")),
+    ];
+    candidates
+        .into_iter()
+        .flatten()
+        .find(|p| p.is_dir())
+        .unwrap_or_else(|| manifest.join("../shared/corpus"))
 }
 
 #[test]

@@ -48,7 +48,7 @@
 //!
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.1 and Algorithm 1; the sharpness
-//! criterion is from Hubeli & Gross 2001 (the paper's reference [11]).
+//! criterion is from Hubeli & Gross 2001 (the paper's reference \[11\]).
 use crate::mesh::{HalfedgeId, TriangleMesh};
 
 use super::options::Lscm2002Options;
