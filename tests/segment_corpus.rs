@@ -99,10 +99,11 @@ fn segment_every_corpus_mesh() {
                 .map(|(m, _)| m.flipped_faces.len())
                 .sum();
             println!(
-                "  validated: charts {:5} largest {:7} time {ms:8.1} ms splits(flip,overlap,area) {:?} unresolved {} flips {flips}",
+                "  validated: charts {:5} largest {:7} time {ms:8.1} ms splits(flip,overlap,area) {:?} merges {} unresolved {} flips {flips}",
                 v.segmentation.num_charts(),
                 largest,
                 v.splits,
+                v.merges,
                 v.unresolved.len()
             );
             let mut kinds: std::collections::BTreeMap<String, usize> = Default::default();

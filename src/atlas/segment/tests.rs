@@ -649,6 +649,13 @@ fn validation_bounds_the_area_ratio() {
     let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid options");
     assert!(v.splits[2] >= 2, "{:?}", v.splits);
     assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
+    // Bookkeeping: every split adds a chart (the disk guarantee may add more), every merge
+    // removes one.
+    let extra = v.segmentation.stats.disk_splits - seg.stats.disk_splits;
+    assert_eq!(
+        v.segmentation.num_charts(),
+        2 + v.splits.iter().sum::<usize>() + extra - v.merges
+    );
     assert_contract(&mesh, &v.segmentation);
     for (c, m) in v.segmentation.charts.iter().zip(&v.maps) {
         let (cm, _) = chart_mesh(&mesh, c);

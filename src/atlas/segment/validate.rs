@@ -23,7 +23,9 @@
 //! the number of splits is bounded by the face count. Deterministic: charts are processed in a
 //! fixed order and the parameterizer is deterministic.
 //!
-//! Not done yet (stated): small charts made by splitting are not merged back into a neighbour.
+//! Small charts are then merged back into a neighbour when the merged chart is still a disk and
+//! passes all three tests (one pass, smallest first, two neighbours tried each; see `merge_back`).
+//!
 //! Charts containing a zero-area face cannot be parameterized by LSCM (its `1/√d_T` weight is
 //! infinite); they are returned unsplit with [`ChartDefect::Unparameterizable`] so that the caller
 //! sees them rather than losing them.
@@ -104,6 +106,8 @@ pub struct ValidatedCharts {
     pub unresolved: Vec<(usize, ChartDefect)>,
     /// Splits made, by cause: flips, overlaps, area ratio.
     pub splits: [usize; 3],
+    /// Small charts merged back into a neighbour after splitting.
+    pub merges: usize,
 }
 
 /// Parameterizes every chart of `seg` and splits invalid ones until all are valid (module doc).
@@ -199,6 +203,13 @@ pub fn validate_charts(
             pending.push(part);
         }
     }
+    let merges = if splits.iter().sum::<usize>() > 0 {
+        let unresolved: std::collections::BTreeSet<FaceId> =
+            unresolved_faces.iter().map(|(f, _)| *f).collect();
+        merge_back(mesh, &mut done, &unresolved, options)
+    } else {
+        0
+    };
     // Order by lowest face like `segment_charts`, keeping maps aligned.
     for (faces, _) in &mut done {
         faces.sort_unstable();
@@ -215,7 +226,82 @@ pub fn validate_charts(
         maps: done.into_iter().map(|(_, m)| m).collect(),
         unresolved,
         splits,
+        merges,
     })
+}
+
+/// Merges small valid charts back into a neighbour when the merged chart is still a disk and
+/// still valid (issue 4: "small charts made by splitting are merged back"). Small means fewer
+/// faces than half the mean chart size; smallest first, at most the two neighbours sharing the
+/// most edges are tried. Returns the number of merges. Cost: one parameterization per try.
+fn merge_back(
+    mesh: &TriangleMesh,
+    done: &mut Vec<(Vec<FaceId>, Option<LocatedMap>)>,
+    unresolved: &std::collections::BTreeSet<FaceId>,
+    options: &ValidateOptions,
+) -> usize {
+    const TRIES: usize = 2;
+    let valid: Vec<bool> = done
+        .iter()
+        .map(|(f, m)| m.is_some() && !unresolved.contains(&f[0]))
+        .collect();
+    let mut label = vec![u32::MAX; mesh.num_faces()];
+    for (i, (faces, _)) in done.iter().enumerate() {
+        for f in faces {
+            label[f.index()] = i as u32;
+        }
+    }
+    let mean = mesh.num_faces() / done.len().max(1);
+    let mut order: Vec<usize> = (0..done.len())
+        .filter(|&i| valid[i] && done[i].0.len() * 2 < mean)
+        .collect();
+    order.sort_by_key(|&i| (done[i].0.len(), done[i].0.iter().min().copied()));
+    let mut merges = 0;
+    for i in order {
+        if done[i].0.is_empty() {
+            continue;
+        }
+        let mut shared: std::collections::BTreeMap<u32, usize> = Default::default();
+        for &f in &done[i].0 {
+            for g in mesh.face_neighbors(f).into_iter().flatten() {
+                let l = label[g.index()];
+                if l != i as u32 && l != u32::MAX && valid[l as usize] {
+                    *shared.entry(l).or_default() += 1;
+                }
+            }
+        }
+        let mut nbrs: Vec<(usize, u32)> = shared.into_iter().map(|(l, n)| (n, l)).collect();
+        nbrs.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.cmp(&y.1)));
+        for &(_, j) in nbrs.iter().take(TRIES) {
+            let j = j as usize;
+            let mut union = done[j].0.clone();
+            union.extend_from_slice(&done[i].0);
+            let (ci, cj) = (i as u32, j as u32);
+            let inside = |f: FaceId| {
+                let l = label[f.index()];
+                l == ci || l == cj
+            };
+            if disk_check(mesh, &union, &inside).is_err() {
+                continue;
+            }
+            let (cm, global) = chart_mesh(mesh, &union);
+            let Ok(map) = parameterize_chart(&cm, &options.parameterize) else {
+                continue;
+            };
+            if find_defect(&union, &cm, &map, options).is_some() {
+                continue;
+            }
+            for f in &done[i].0 {
+                label[f.index()] = cj;
+            }
+            done[j] = (union, Some((map, global)));
+            done[i].0.clear();
+            merges += 1;
+            break;
+        }
+    }
+    done.retain(|(f, _)| !f.is_empty());
+    merges
 }
 
 /// The first defect of a chart's map, in the order flips, boundary overlap, area ratio.
