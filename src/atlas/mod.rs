@@ -1,2 +1,3 @@
 //! The atlas pipeline: pure, synchronous and deterministic.
 pub mod parameterize;
+pub mod segment;

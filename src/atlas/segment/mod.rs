@@ -1,0 +1,564 @@
+//! Segmentation: cut a mesh into charts that are topological disks (issue 4).
+//!
+//! Purpose: the first stage of the atlas pipeline. [`segment_charts`] partitions the faces of a
+//! [`TriangleMesh`] into charts with natural shapes, their borders on high-curvature features
+//! where seams do not show (LSCM paper §3), and guarantees that every chart can be flattened.
+//!
+//! **Architecture invariant (the stage contract).** Every chart returned by [`segment_charts`]
+//! is a topological disk: its faces form one component through glued edges, every vertex's
+//! faces within the chart form one fan (no pinch), `χ = V − E + F = 1` and it has exactly one
+//! boundary loop — counted with the chart's own vertices and edges, where an edge is interior
+//! when both its faces are in the chart. [`check_chart_is_disk`] checks exactly this; debug builds
+//! assert it on every chart before returning, and the tests call it on every chart of every
+//! fixture. Every face is in exactly one chart; charts never span connected components.
+//!
+//! How the guarantee is kept: the method (today [`SegmentMethod::Lscm2002`]: `features.rs` then
+//! `grow.rs`) proposes a partition; each proposed chart is split into its glued components, and
+//! each component that is not a disk (a handle, an annulus, a closed part, a pinch) is re-grown as
+//! two charts from the two ends of a diameter of its face graph (breadth-first, simultaneously),
+//! and the parts are checked again. Each split makes one more chart, so there are at most
+//! `F − 1` splits; a single triangle is always a disk, so the process ends with disks. A hard
+//! bound on splits (the face count) falls back to one chart per face should it ever be hit.
+//!
+//! Determinism: no hash maps; every order is by face or half-edge id; the same mesh and options
+//! give the same charts.
+//!
+//! Units: distances in model units (`_m`), angles in radians (`_rad`), counts of edges.
+//!
+//! Code map: [`options`] (every option, unit, default), [`features`] (§3.1, Algorithm 1),
+//! [`grow`] (§3.2, Algorithm 2), this file (the disk guarantee, the chart-count cap, the
+//! [`ChartMesh`] extraction for the parameterizer).
+//!
+//! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
+//! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.
+pub mod features;
+pub mod grow;
+pub mod options;
+pub mod validate;
+
+#[cfg(test)]
+mod tests;
+
+use std::collections::VecDeque;
+
+use crate::atlas::parameterize::ChartMesh;
+use crate::mesh::{FaceData, FaceId, HalfedgeId, TriangleMesh, VertexId};
+
+pub use features::{detect_features, Features};
+pub use grow::{distance_to_features, grow_charts, GrownCharts};
+pub use options::{Lscm2002Options, SegmentMethod, SegmentOptions};
+pub use validate::{validate_charts, ChartDefect, LocatedMap, ValidateOptions, ValidatedCharts};
+
+/// A chart of a [`Segmentation`], numbered by its lowest face id. Displayed as `C3`.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Debug)]
+pub struct ChartId(pub u32);
+
+impl ChartId {
+    /// The id as an index into `Segmentation::charts`.
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// Errors of the segmentation stage.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SegmentError {
+    /// An option has a meaningless value.
+    #[error("invalid segmentation option `{option}`: {detail}")]
+    InvalidOption {
+        /// The option's path, e.g. `lscm.feature_fraction`.
+        option: &'static str,
+        /// What is wrong and what to use instead.
+        detail: String,
+    },
+}
+
+/// Why a set of faces is not a topological disk ([`check_chart_is_disk`]).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum NotADisk {
+    /// No faces.
+    #[error("the chart has no faces")]
+    Empty,
+    /// A face id is out of range or listed twice.
+    #[error("face {0:?} is out of range or listed twice")]
+    BadFace(FaceId),
+    /// The faces are not connected through glued edges.
+    #[error(
+        "the chart is not connected: {reached} of {faces} faces reachable through glued edges"
+    )]
+    Disconnected {
+        /// Faces reached from the first one.
+        reached: usize,
+        /// Faces in the chart.
+        faces: usize,
+    },
+    /// A vertex's faces within the chart form several fans.
+    #[error("vertex {vertex:?} is pinched: its faces in the chart form {fans} fans")]
+    Pinched {
+        /// The vertex.
+        vertex: VertexId,
+        /// Number of fans.
+        fans: usize,
+    },
+    /// Wrong Euler characteristic or boundary loop count (handle, annulus, closed surface).
+    #[error("χ = {euler_characteristic} with {boundary_loops} boundary loops; a disk has χ = 1 and 1 loop")]
+    Topology {
+        /// `V − E + F` of the chart.
+        euler_characteristic: i64,
+        /// Boundary loops of the chart.
+        boundary_loops: usize,
+    },
+}
+
+/// Counts of a chart that passed [`check_chart_is_disk`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DiskInfo {
+    /// F.
+    pub num_faces: usize,
+    /// V.
+    pub num_vertices: usize,
+    /// E.
+    pub num_edges: usize,
+    /// Half-edges on the chart's boundary (= boundary edges).
+    pub num_boundary_edges: usize,
+}
+
+/// Counters of one [`segment_charts`] run (for reports and tests).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SegmentStats {
+    /// Feature edges detected (§3.1).
+    pub feature_edges: usize,
+    /// Feature curves kept.
+    pub feature_curves: usize,
+    /// Seeds of chart growing (§3.2).
+    pub seeds: usize,
+    /// Charts after growing and merging, before the disk guarantee.
+    pub grown_charts: usize,
+    /// Splits made by the disk guarantee (including splitting disconnected charts).
+    pub disk_splits: usize,
+    /// Merges made to respect [`SegmentOptions::max_charts`].
+    pub cap_merges: usize,
+    /// `maxdist`, the largest distance to features, model units.
+    pub max_distance_m: f64,
+}
+
+/// The charts of a mesh.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Segmentation {
+    /// The chart of each face.
+    pub face_chart: FaceData<ChartId>,
+    /// The faces of each chart, ascending; charts ordered by lowest face id.
+    pub charts: Vec<Vec<FaceId>>,
+    /// What happened on the way.
+    pub stats: SegmentStats,
+}
+
+impl Segmentation {
+    /// Number of charts.
+    pub fn num_charts(&self) -> usize {
+        self.charts.len()
+    }
+    /// The faces of chart `c` (empty for an id out of range).
+    pub fn chart_faces(&self, c: ChartId) -> &[FaceId] {
+        self.charts.get(c.index()).map_or(&[], Vec::as_slice)
+    }
+}
+
+/// Cuts `mesh` into charts, each a topological disk (see the module doc for the contract).
+///
+/// Errors: only [`SegmentError::InvalidOption`]; every built mesh can be segmented.
+/// Cost: `O(F log F)` for features and growing, plus the disk checks (linear in each chart) and
+/// splits (each linear in the chart split).
+pub fn segment_charts(
+    mesh: &TriangleMesh,
+    options: &SegmentOptions,
+) -> Result<Segmentation, SegmentError> {
+    options.check()?;
+    let mut stats = SegmentStats::default();
+    let proposed = match options.method {
+        SegmentMethod::Lscm2002 => {
+            let feats = detect_features(mesh, &options.lscm);
+            stats.feature_edges = feats.num_feature_edges();
+            stats.feature_curves = feats.curves.len();
+            let grown = grow_charts(mesh, &feats, &options.lscm);
+            stats.seeds = grown.num_seeds;
+            stats.grown_charts = grown.num_charts;
+            stats.max_distance_m = grown.max_distance_m;
+            grown.face_chart
+        }
+    };
+    let mut work: Vec<Vec<FaceId>> = Vec::new();
+    for f in mesh.faces() {
+        let c = proposed[f.index()] as usize;
+        if work.len() <= c {
+            work.resize(c + 1, Vec::new());
+        }
+        work[c].push(f);
+    }
+    let mut charts = enforce_disks(mesh, work, &mut stats);
+    if let Some(cap) = options.max_charts {
+        stats.cap_merges = merge_to_cap(mesh, &mut charts, cap);
+    }
+    Ok(finish(mesh, charts, stats))
+}
+
+/// Sorts charts by lowest face, builds the face → chart map, asserts the contract in debug.
+pub(super) fn finish(
+    mesh: &TriangleMesh,
+    mut charts: Vec<Vec<FaceId>>,
+    stats: SegmentStats,
+) -> Segmentation {
+    for c in &mut charts {
+        c.sort_unstable();
+    }
+    charts.retain(|c| !c.is_empty());
+    charts.sort_unstable_by_key(|c| c[0]);
+    let mut face_chart = vec![ChartId(u32::MAX); mesh.num_faces()];
+    for (i, c) in charts.iter().enumerate() {
+        for f in c {
+            face_chart[f.index()] = ChartId(i as u32);
+        }
+    }
+    debug_assert!(
+        face_chart.iter().all(|c| c.0 != u32::MAX),
+        "a face has no chart"
+    );
+    debug_assert!(
+        charts.iter().all(|c| check_chart_is_disk(mesh, c).is_ok()),
+        "segment_charts returned a chart that is not a disk"
+    );
+    Segmentation {
+        face_chart: FaceData::from_vec(face_chart),
+        charts,
+        stats,
+    }
+}
+
+/// Checks that `faces` form a topological disk in `mesh` (the invariant of the module doc).
+/// `faces` may be in any order. Cost: `O(F log F)` in the chart's size (sort + rotations).
+pub fn check_chart_is_disk(mesh: &TriangleMesh, faces: &[FaceId]) -> Result<DiskInfo, NotADisk> {
+    let mut sorted = faces.to_vec();
+    sorted.sort_unstable();
+    for w in sorted.windows(2) {
+        if w[0] == w[1] {
+            return Err(NotADisk::BadFace(w[0]));
+        }
+    }
+    if let Some(&f) = sorted.iter().find(|f| f.index() >= mesh.num_faces()) {
+        return Err(NotADisk::BadFace(f));
+    }
+    disk_check(mesh, &sorted, &|f| sorted.binary_search(&f).is_ok())
+}
+
+/// [`check_chart_is_disk`] with a membership test; `faces` must be distinct and in range.
+pub(super) fn disk_check(
+    mesh: &TriangleMesh,
+    faces: &[FaceId],
+    inside: &dyn Fn(FaceId) -> bool,
+) -> Result<DiskInfo, NotADisk> {
+    let Some(&first) = faces.first() else {
+        return Err(NotADisk::Empty);
+    };
+    let glued_inside = |h: HalfedgeId| mesh.opposite(h).filter(|o| inside(o.face()));
+    // Connected through glued edges.
+    let reached = flood(mesh, &[first], inside).len();
+    if reached != faces.len() {
+        return Err(NotADisk::Disconnected {
+            reached,
+            faces: faces.len(),
+        });
+    }
+    // One fan per vertex: count the outgoing half-edges that start a run of chart faces in the
+    // rotation (their predecessor, across `g`'s own edge, is outside or absent).
+    let mut vertices: Vec<VertexId> = faces.iter().flat_map(|&f| mesh.face_vertices(f)).collect();
+    vertices.sort_unstable();
+    vertices.dedup();
+    for &v in &vertices {
+        let starts = mesh
+            .outgoing_halfedges(v)
+            .filter(|&g| inside(g.face()) && glued_inside(g).is_none())
+            .count();
+        if starts > 1 {
+            return Err(NotADisk::Pinched {
+                vertex: v,
+                fans: starts,
+            });
+        }
+    }
+    let mut boundary: Vec<HalfedgeId> = Vec::new();
+    let mut interior_halves = 0usize;
+    for &f in faces {
+        for h in mesh.face_halfedges(f) {
+            if glued_inside(h).is_some() {
+                interior_halves += 1;
+            } else {
+                boundary.push(h);
+            }
+        }
+    }
+    let num_edges = interior_halves / 2 + boundary.len();
+    let chi = vertices.len() as i64 - num_edges as i64 + faces.len() as i64;
+    // Boundary loops: the successor of boundary half-edge `h` leaves `to(h)`; rotate backwards
+    // (g -> next(opposite(g))) from `next(h)` while the edge is interior to the chart.
+    boundary.sort_unstable();
+    let mut visited = vec![false; boundary.len()];
+    let mut loops = 0usize;
+    for i in 0..boundary.len() {
+        if visited[i] {
+            continue;
+        }
+        loops += 1;
+        let mut j = i;
+        // Each step visits a new boundary half-edge; bounded by their count.
+        for _ in 0..boundary.len() {
+            visited[j] = true;
+            let mut g = boundary[j].next();
+            for _ in 0..mesh.num_halfedges() {
+                match glued_inside(g) {
+                    Some(o) => g = o.next(),
+                    None => break,
+                }
+            }
+            match boundary.binary_search(&g) {
+                Ok(k) if !visited[k] => j = k,
+                _ => break,
+            }
+        }
+    }
+    if chi != 1 || loops != 1 {
+        return Err(NotADisk::Topology {
+            euler_characteristic: chi,
+            boundary_loops: loops,
+        });
+    }
+    Ok(DiskInfo {
+        num_faces: faces.len(),
+        num_vertices: vertices.len(),
+        num_edges,
+        num_boundary_edges: boundary.len(),
+    })
+}
+
+/// Faces reachable from `seeds` through glued edges between faces that are `inside`, in
+/// breadth-first order.
+fn flood(mesh: &TriangleMesh, seeds: &[FaceId], inside: &dyn Fn(FaceId) -> bool) -> Vec<FaceId> {
+    let mut seen = std::collections::BTreeSet::new();
+    let mut order = Vec::new();
+    let mut queue = VecDeque::new();
+    for &s in seeds {
+        if seen.insert(s) {
+            queue.push_back(s);
+        }
+    }
+    while let Some(f) = queue.pop_front() {
+        order.push(f);
+        for g in mesh.face_neighbors(f).into_iter().flatten() {
+            if inside(g) && seen.insert(g) {
+                queue.push_back(g);
+            }
+        }
+    }
+    order
+}
+
+/// Splits each proposed chart (faces ascending, charts disjoint) into glued components and each non-disk component into two
+/// re-grown halves until every chart is a disk (see the module doc).
+pub(super) fn enforce_disks(
+    mesh: &TriangleMesh,
+    work: Vec<Vec<FaceId>>,
+    stats: &mut SegmentStats,
+) -> Vec<Vec<FaceId>> {
+    let nf = mesh.num_faces();
+    // `label[f]` is the work item currently holding `f`: O(1) membership for every check. Faces
+    // in no item keep `u32::MAX`.
+    let mut label: Vec<u32> = vec![u32::MAX; nf];
+    for (i, item) in work.iter().enumerate() {
+        for f in item {
+            label[f.index()] = i as u32;
+        }
+    }
+    let mut next_label = work.len() as u32;
+    let mut done: Vec<Vec<FaceId>> = Vec::new();
+    let mut pending: Vec<(u32, Vec<FaceId>)> = work
+        .into_iter()
+        .enumerate()
+        .map(|(i, v)| (i as u32, v))
+        .collect();
+    pending.reverse();
+    let max_splits = nf;
+    let splits_before = stats.disk_splits;
+    while let Some((id, faces)) = pending.pop() {
+        if faces.is_empty() {
+            continue;
+        }
+        let inside = |f: FaceId| label[f.index()] == id;
+        // Split off glued components first.
+        let comp = flood(mesh, &faces[..1], &inside);
+        if comp.len() != faces.len() {
+            stats.disk_splits += 1;
+            let mut in_comp = comp.clone();
+            in_comp.sort_unstable();
+            let rest: Vec<FaceId> = faces
+                .iter()
+                .copied()
+                .filter(|f| in_comp.binary_search(f).is_err())
+                .collect();
+            let (a, b) = (next_label, next_label + 1);
+            next_label += 2;
+            for &f in &in_comp {
+                label[f.index()] = a;
+            }
+            for &f in &rest {
+                label[f.index()] = b;
+            }
+            pending.push((b, rest));
+            pending.push((a, in_comp));
+            continue;
+        }
+        if disk_check(mesh, &faces, &inside).is_ok() {
+            done.push(faces);
+            continue;
+        }
+        if stats.disk_splits - splits_before >= max_splits {
+            // Unreachable in theory (see the module doc); a triangle is always a disk.
+            done.extend(faces.iter().map(|&f| vec![f]));
+            continue;
+        }
+        stats.disk_splits += 1;
+        let (half_a, half_b) = split_in_two(mesh, &faces, &inside);
+        let (a, b) = (next_label, next_label + 1);
+        next_label += 2;
+        for &f in &half_a {
+            label[f.index()] = a;
+        }
+        for &f in &half_b {
+            label[f.index()] = b;
+        }
+        pending.push((b, half_b));
+        pending.push((a, half_a));
+    }
+    done
+}
+
+/// Re-grows a connected chart (at least 2 faces) as two charts from the ends of a diameter of its
+/// face graph: breadth-first from both ends at once, one layer at a time, so both halves are
+/// connected and non-empty.
+fn split_in_two(
+    mesh: &TriangleMesh,
+    faces: &[FaceId],
+    inside: &dyn Fn(FaceId) -> bool,
+) -> (Vec<FaceId>, Vec<FaceId>) {
+    let a = *flood(mesh, &faces[..1], inside).last().unwrap_or(&faces[0]);
+    let b = *flood(mesh, &[a], inside).last().unwrap_or(&a);
+    grow_two(mesh, faces, inside, a, b)
+}
+
+/// Grows two charts from faces `a` and `b` of a connected chart, breadth-first and one layer at a
+/// time, so both parts are connected; `a == b` returns the chart whole and an empty part.
+/// Faces unreachable from `a` and `b` (only if the chart is disconnected) join part `a`.
+pub(super) fn grow_two(
+    mesh: &TriangleMesh,
+    faces: &[FaceId],
+    inside: &dyn Fn(FaceId) -> bool,
+    a: FaceId,
+    b: FaceId,
+) -> (Vec<FaceId>, Vec<FaceId>) {
+    if a == b {
+        return (faces.to_vec(), Vec::new());
+    }
+    let mut side: std::collections::BTreeMap<FaceId, bool> = std::collections::BTreeMap::new();
+    side.insert(a, false);
+    side.insert(b, true);
+    let mut queue = VecDeque::from([a, b]);
+    while let Some(f) = queue.pop_front() {
+        let s = side[&f];
+        for g in mesh.face_neighbors(f).into_iter().flatten() {
+            if inside(g) && !side.contains_key(&g) {
+                side.insert(g, s);
+                queue.push_back(g);
+            }
+        }
+    }
+    let mut half_a: Vec<FaceId> = side.iter().filter(|(_, &s)| !s).map(|(&f, _)| f).collect();
+    let half_b = side.iter().filter(|(_, &s)| s).map(|(&f, _)| f).collect();
+    half_a.extend(faces.iter().filter(|f| !side.contains_key(f)));
+    half_a.sort_unstable();
+    (half_a, half_b)
+}
+
+/// Merges adjacent charts, smallest chart first, while there are more than `cap` charts and the
+/// union is still a disk. Returns the number of merges. Cost: up to `O(charts · F)` disk checks.
+fn merge_to_cap(mesh: &TriangleMesh, charts: &mut Vec<Vec<FaceId>>, cap: usize) -> usize {
+    let mut merges = 0;
+    let mut label = vec![0u32; mesh.num_faces()];
+    'outer: while charts.len() > cap {
+        for (i, c) in charts.iter().enumerate() {
+            for f in c {
+                label[f.index()] = i as u32;
+            }
+        }
+        // Smallest first, ties by lowest face.
+        let mut order: Vec<usize> = (0..charts.len()).collect();
+        order.sort_by_key(|&i| (charts[i].len(), charts[i].first().copied()));
+        for &i in &order {
+            // Neighbouring charts by number of shared edges (most first), ties by index.
+            let mut shared: std::collections::BTreeMap<u32, usize> = Default::default();
+            for &f in &charts[i] {
+                for g in mesh.face_neighbors(f).into_iter().flatten() {
+                    let l = label[g.index()];
+                    if l != i as u32 {
+                        *shared.entry(l).or_default() += 1;
+                    }
+                }
+            }
+            let mut nbrs: Vec<(usize, u32)> = shared.into_iter().map(|(l, n)| (n, l)).collect();
+            nbrs.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.cmp(&y.1)));
+            for (_, j) in nbrs {
+                let j = j as usize;
+                let (ci, cj) = (i as u32, j as u32);
+                let mut union = charts[i].clone();
+                union.extend_from_slice(&charts[j]);
+                let inside = |f: FaceId| {
+                    let l = label[f.index()];
+                    l == ci || l == cj
+                };
+                if disk_check(mesh, &union, &inside).is_ok() {
+                    let moved = std::mem::take(&mut charts[i]);
+                    charts[j].extend(moved);
+                    charts.swap_remove(i);
+                    merges += 1;
+                    continue 'outer;
+                }
+            }
+        }
+        break;
+    }
+    merges
+}
+
+/// The chart `faces` as a chart-local indexed mesh for the parameterizer, and the map from local
+/// to global vertex ids. Local vertices are numbered in order of first use along `faces`;
+/// triangles keep `faces` order and corner order (orientation is preserved).
+pub fn chart_mesh(mesh: &TriangleMesh, faces: &[FaceId]) -> (ChartMesh, Vec<VertexId>) {
+    // Vertex ids sorted with their local index: O(k log k) lookups without a per-mesh array.
+    let mut local_of: std::collections::BTreeMap<VertexId, u32> = Default::default();
+    let mut global: Vec<VertexId> = Vec::new();
+    let mut triangles = Vec::with_capacity(faces.len());
+    for &f in faces {
+        let t = mesh.face_vertices(f).map(|v| {
+            *local_of.entry(v).or_insert_with(|| {
+                global.push(v);
+                (global.len() - 1) as u32
+            })
+        });
+        triangles.push(t);
+    }
+    let positions_m = global.iter().map(|&v| mesh.position(v)).collect();
+    (
+        ChartMesh {
+            positions_m,
+            triangles,
+        },
+        global,
+    )
+}

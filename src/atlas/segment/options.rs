@@ -1,0 +1,108 @@
+//! Options of the segmentation stage ([`super::segment_charts`]).
+//!
+//! Purpose: every knob of the LSCM-paper segmentation (Lévy et al. 2002, §3.1–§3.2) with its unit,
+//! default and meaning, behind a [`SegmentMethod`] enum so that a second method (Iso-charts
+//! spectral segmentation) plugs in as a new variant with its own option block, without reshaping
+//! [`SegmentOptions`] or the `segment_charts` contract.
+//!
+//! Invariants: [`SegmentOptions::check`] rejects values that make no sense (a fraction outside
+//! `(0, 1]`, a zero string length); no option uses 0 to mean "unlimited" (`Option` does).
+//!
+//! Units: fractions are plain ratios in `(0, 1]`; lengths are counts of mesh edges.
+//!
+//! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
+//! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.1 (feature fraction 5 %,
+//! `max_string_length` 5, `min_feature_length` 15) and §3.2 (ε = maxdist / 4).
+use super::SegmentError;
+
+/// Which segmentation algorithm cuts the mesh into charts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SegmentMethod {
+    /// Feature detection + multi-source chart growing of the LSCM paper (§3.1–§3.2), followed by
+    /// the disk guarantee. Tuned by [`SegmentOptions::lscm`].
+    #[default]
+    Lscm2002,
+}
+
+/// Options of the LSCM-paper method ([`SegmentMethod::Lscm2002`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lscm2002Options {
+    /// Fraction of the mesh's interior edges (with a defined dihedral angle) whose sharpness is at
+    /// least the feature threshold τ, i.e. τ is the `1 − feature_fraction` quantile of sharpness.
+    /// Ratio in `(0, 1]`. Default `0.05` (the paper keeps 5 % of the edges).
+    pub feature_fraction: f64,
+    /// Length of the look-ahead strings of Algorithm 1, in edges: gaps shorter than this along a
+    /// feature are bridged. At least 1. Default `5`.
+    pub max_string_length: usize,
+    /// A grown feature curve is kept only when it has more than this many edges; shorter ones are
+    /// treated as noise. Default `15`.
+    pub min_feature_length: usize,
+    /// Merge threshold ε of Algorithm 2 as a fraction of `maxdist`, the largest
+    /// distance-to-features on the mesh: two charts merge when they meet at a face whose distance
+    /// is within ε of both charts' largest distance (i.e. close to both seeds). Ratio `>= 0`;
+    /// 0 disables merging. Default `0.25` (ε = maxdist / 4).
+    pub merge_epsilon_fraction: f64,
+}
+
+impl Default for Lscm2002Options {
+    fn default() -> Self {
+        Self {
+            feature_fraction: 0.05,
+            max_string_length: 5,
+            min_feature_length: 15,
+            merge_epsilon_fraction: 0.25,
+        }
+    }
+}
+
+/// Options of [`super::segment_charts`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SegmentOptions {
+    /// The algorithm. Default [`SegmentMethod::Lscm2002`].
+    pub method: SegmentMethod,
+    /// Tuning of [`SegmentMethod::Lscm2002`] (ignored by other methods).
+    pub lscm: Lscm2002Options,
+    /// Upper bound on the number of charts, or `None` for no bound (default). Best effort: once
+    /// the charts are grown, adjacent charts are merged, smallest first, while the merged chart is
+    /// still a disk and there are more charts than the bound. The disk guarantee always wins, so
+    /// a mesh with more connected components than the bound still gets one chart per component.
+    pub max_charts: Option<usize>,
+}
+
+impl SegmentOptions {
+    /// Rejects meaningless values, naming the option and how to fix it.
+    pub fn check(&self) -> Result<(), SegmentError> {
+        let l = &self.lscm;
+        let bad = |option: &'static str, detail: String| {
+            Err(SegmentError::InvalidOption { option, detail })
+        };
+        if !(l.feature_fraction > 0.0 && l.feature_fraction <= 1.0) {
+            return bad(
+                "lscm.feature_fraction",
+                format!("{} is not in (0, 1]; use e.g. 0.05", l.feature_fraction),
+            );
+        }
+        if l.max_string_length == 0 {
+            return bad(
+                "lscm.max_string_length",
+                "0 edges; use at least 1 (default 5)".into(),
+            );
+        }
+        if !(l.merge_epsilon_fraction >= 0.0 && l.merge_epsilon_fraction.is_finite()) {
+            return bad(
+                "lscm.merge_epsilon_fraction",
+                format!(
+                    "{} is not a finite ratio >= 0; use e.g. 0.25",
+                    l.merge_epsilon_fraction
+                ),
+            );
+        }
+        if self.max_charts == Some(0) {
+            return bad(
+                "max_charts",
+                "Some(0) allows no chart; use None for no bound or a positive count".into(),
+            );
+        }
+        Ok(())
+    }
+}

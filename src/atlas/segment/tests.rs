@@ -1,0 +1,692 @@
+//! Tests of the segmentation stage: the disk contract on every fixture category, the paper's
+//! expected chart layouts (cube, sphere, torus), features and distances recomputed independently.
+use proptest::prelude::*;
+
+use super::*;
+use crate::mesh::{fixtures, MeshInput};
+
+fn build(input: &MeshInput) -> TriangleMesh {
+    TriangleMesh::build(input).expect("fixture builds").mesh
+}
+
+/// A cube `[0, n]³` whose sides are `n × n` grids (welded by bit-identical integer positions),
+/// outward, `12 n²` faces. Side `s` holds faces `2n²·s .. 2n²·(s+1)`.
+fn subdivided_cube(n: u32) -> MeshInput {
+    let sides: [([f64; 3], [f64; 3], [f64; 3]); 6] = [
+        ([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]),
+        ([0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+        ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]),
+        ([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
+        ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
+    ];
+    let nf = f64::from(n);
+    let mut parts = Vec::new();
+    for (o, u, v) in sides {
+        let mut g = fixtures::grid(n, n);
+        for p in &mut g.positions_m {
+            let (a, b) = (p[0], p[1]);
+            *p = [0, 1, 2].map(|k| o[k] * nf + a * u[k] + b * v[k]);
+        }
+        parts.push(g);
+    }
+    fixtures::concat(&parts)
+}
+
+/// Every face in exactly one chart, the map and the lists agree, every chart passes
+/// [`check_chart_is_disk`] and, independently, the parameterizer's own chart validation
+/// (`ChartMesh::validate`: connected, manifold, one boundary loop, χ = 1) unless a face is
+/// zero-area (which that validation rejects for numerical reasons, not topological ones).
+fn assert_contract(mesh: &TriangleMesh, seg: &Segmentation) {
+    let mut count = vec![0u32; mesh.num_faces()];
+    for (i, c) in seg.charts.iter().enumerate() {
+        assert!(!c.is_empty());
+        for &f in c {
+            count[f.index()] += 1;
+            assert_eq!(seg.face_chart[f], ChartId(i as u32));
+        }
+        check_chart_is_disk(mesh, c).unwrap_or_else(|e| panic!("chart {i}: {e}"));
+        let (cm, global) = chart_mesh(mesh, c);
+        assert_eq!(cm.triangles.len(), c.len());
+        for (l, g) in global.iter().enumerate() {
+            assert_eq!(cm.positions_m[l], mesh.position(*g));
+        }
+        if c.iter().all(|&f| mesh.face_normal(f).is_some()) {
+            cm.validate()
+                .unwrap_or_else(|e| panic!("chart {i} fails ChartMesh::validate: {e}"));
+        }
+    }
+    assert!(
+        count.iter().all(|&n| n == 1),
+        "every face in exactly one chart"
+    );
+    // Charts never span components.
+    let comps = mesh.components();
+    for c in &seg.charts {
+        assert!(c.iter().all(|&f| comps.of_face(f) == comps.of_face(c[0])));
+    }
+    // Ordered by lowest face id.
+    assert!(seg.charts.windows(2).all(|w| w[0][0] < w[1][0]));
+}
+
+fn segment(mesh: &TriangleMesh) -> Segmentation {
+    segment_charts(mesh, &SegmentOptions::default()).expect("default options are valid")
+}
+
+#[test]
+fn subdivided_cube_gives_one_chart_per_side() {
+    let n = 8;
+    let mesh = build(&subdivided_cube(n));
+    let seg = segment(&mesh);
+    assert_contract(&mesh, &seg);
+    assert_eq!(seg.num_charts(), 6, "stats {:?}", seg.stats);
+    // Each chart is exactly one side: all its normals agree.
+    for c in &seg.charts {
+        assert_eq!(c.len() as u32, 2 * n * n);
+        let n0 = mesh.face_normal(c[0]).expect("non-degenerate");
+        for &f in c {
+            let nf = mesh.face_normal(f).expect("non-degenerate");
+            assert!((0..3).all(|k| (nf[k] - n0[k]).abs() < 1e-12));
+        }
+    }
+}
+
+#[test]
+fn subdivided_cube_features_are_the_cube_edges() {
+    let n = 8;
+    let mesh = build(&subdivided_cube(n));
+    let feats = detect_features(&mesh, &Lscm2002Options::default());
+    let tau = feats.threshold_rad.expect("the cube has sharp edges");
+    assert!((tau - std::f64::consts::FRAC_PI_2).abs() < 1e-9);
+    // Every feature edge is a right-angle edge (recomputed from the face normals), and every
+    // cube edge (12 · n mesh edges) is found.
+    let mut found = 0;
+    for h in mesh.edges() {
+        let o = mesh.opposite(h).expect("closed");
+        let a = mesh.face_normal(h.face()).expect("non-degenerate");
+        let b = mesh.face_normal(o.face()).expect("non-degenerate");
+        let right_angle = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]).abs() < 1e-9;
+        assert_eq!(feats.is_feature_edge(h), right_angle, "edge {h:?}");
+        assert_eq!(feats.is_feature_edge(h), feats.is_feature_edge(o));
+        found += usize::from(right_angle);
+    }
+    assert_eq!(found, 12 * n as usize);
+    assert_eq!(feats.num_feature_edges(), found);
+}
+
+#[test]
+fn small_cube_without_long_features_still_gives_disks() {
+    // 12 faces: no feature reaches 15 edges, so the cube is a closed featureless surface and is
+    // split by the diameter rule.
+    let mesh = build(&fixtures::cube_split_faces());
+    let seg = segment(&mesh);
+    assert_contract(&mesh, &seg);
+    assert_eq!(seg.stats.feature_edges, 0);
+    assert!((2..=6).contains(&seg.num_charts()), "{}", seg.num_charts());
+}
+
+#[test]
+fn featureless_sphere_is_split_by_the_diameter_rule() {
+    let mesh = build(&fixtures::uv_sphere(12, 24, 1.0));
+    let opts = SegmentOptions {
+        lscm: Lscm2002Options {
+            // No curve on a smooth sphere is this long: the sphere has no features.
+            min_feature_length: usize::MAX,
+            ..Lscm2002Options::default()
+        },
+        ..SegmentOptions::default()
+    };
+    let seg = segment_charts(&mesh, &opts).expect("valid options");
+    assert_contract(&mesh, &seg);
+    assert_eq!(seg.stats.feature_edges, 0);
+    assert_eq!(seg.stats.seeds, 2);
+    assert_eq!(seg.num_charts(), 2);
+    // The two caps are balanced: each holds between a third and two thirds of the area.
+    let total = mesh.surface_area_m2();
+    let a0: f64 = seg.charts[0].iter().map(|&f| mesh.face_area_m2(f)).sum();
+    assert!(
+        a0 > total / 3.0 && a0 < 2.0 * total / 3.0,
+        "{a0} of {total}"
+    );
+}
+
+#[test]
+fn sphere_with_default_options_gives_disks() {
+    let mesh = build(&fixtures::uv_sphere(12, 24, 1.0));
+    let seg = segment(&mesh);
+    assert_contract(&mesh, &seg);
+}
+
+#[test]
+fn torus_gives_disk_charts() {
+    let mesh = build(&fixtures::torus(24, 12, 2.0, 0.5));
+    let seg = segment(&mesh);
+    assert_contract(&mesh, &seg);
+    // A torus is not a disk: at least two charts (one chart would need a cut, not a split).
+    assert!(seg.num_charts() >= 2);
+    assert!(seg.stats.disk_splits >= 1 || seg.stats.grown_charts >= 2);
+}
+
+#[test]
+fn open_cylinder_gives_disk_charts() {
+    let mesh = build(&fixtures::cylinder_open(16, 6, 1.0, 3.0));
+    let seg = segment(&mesh);
+    assert_contract(&mesh, &seg);
+    assert!(seg.num_charts() >= 2, "an annulus needs a split");
+}
+
+#[test]
+fn flat_grid_is_one_chart() {
+    let mesh = build(&fixtures::grid(10, 10));
+    let seg = segment(&mesh);
+    assert_contract(&mesh, &seg);
+    assert_eq!(seg.stats.feature_edges, 0);
+    assert_eq!(seg.num_charts(), 1, "{:?}", seg.stats);
+}
+
+#[test]
+fn every_fixture_category_gives_disks() {
+    let inputs = [
+        fixtures::grid(3, 2),
+        fixtures::cube_split_faces(),
+        fixtures::uv_sphere(4, 6, 1.0),
+        fixtures::torus(6, 4, 2.0, 0.5),
+        fixtures::cylinder_open(5, 2, 1.0, 1.0),
+        fixtures::two_components(),
+        fixtures::bowtie(),
+        fixtures::fin(),
+        fixtures::flipped_face(),
+        fixtures::degenerate(),
+    ];
+    for (i, input) in inputs.iter().enumerate() {
+        let mesh = build(input);
+        let seg = segment(&mesh);
+        assert_contract(&mesh, &seg);
+        // Deterministic: a second run gives the same charts.
+        assert_eq!(seg, segment(&mesh), "fixture {i}");
+    }
+}
+
+#[test]
+fn degenerate_faces_are_their_own_or_a_neighbours_chart() {
+    let mesh = build(&fixtures::degenerate());
+    let seg = segment(&mesh);
+    assert_contract(&mesh, &seg);
+    // Faces 3 and 4 repeat a vertex: isolated by the build, each is a chart of its own.
+    for f in [FaceId(3), FaceId(4)] {
+        assert_eq!(seg.chart_faces(seg.face_chart[f]), &[f]);
+    }
+}
+
+#[test]
+fn disk_check_rejects_non_disks() {
+    let torus = build(&fixtures::torus(6, 4, 2.0, 0.5));
+    let all: Vec<FaceId> = torus.faces().collect();
+    assert_eq!(
+        check_chart_is_disk(&torus, &all),
+        Err(NotADisk::Topology {
+            euler_characteristic: 0,
+            boundary_loops: 0
+        })
+    );
+    let cyl = build(&fixtures::cylinder_open(5, 2, 1.0, 1.0));
+    let all: Vec<FaceId> = cyl.faces().collect();
+    assert_eq!(
+        check_chart_is_disk(&cyl, &all),
+        Err(NotADisk::Topology {
+            euler_characteristic: 0,
+            boundary_loops: 2
+        })
+    );
+    let sphere = build(&fixtures::uv_sphere(4, 6, 1.0));
+    let all: Vec<FaceId> = sphere.faces().collect();
+    assert_eq!(
+        check_chart_is_disk(&sphere, &all),
+        Err(NotADisk::Topology {
+            euler_characteristic: 2,
+            boundary_loops: 0
+        })
+    );
+    // Grid 2×2: faces 0 and 7 are the two far corners, not adjacent.
+    let grid = build(&fixtures::grid(2, 2));
+    assert!(matches!(
+        check_chart_is_disk(&grid, &[FaceId(0), FaceId(7)]),
+        Err(NotADisk::Disconnected {
+            reached: 1,
+            faces: 2
+        })
+    ));
+    // Faces 1 (lower left, upper triangle) and 6 (upper right, lower triangle) share only the
+    // centre vertex... but they are not glued: disconnected. A pinch needs a connected chart:
+    // a 3×3 grid ring around the centre square minus one face touches itself at a vertex.
+    assert_eq!(check_chart_is_disk(&grid, &[]), Err(NotADisk::Empty));
+    assert_eq!(
+        check_chart_is_disk(&grid, &[FaceId(0), FaceId(0)]),
+        Err(NotADisk::BadFace(FaceId(0)))
+    );
+    assert_eq!(
+        check_chart_is_disk(&grid, &[FaceId(99)]),
+        Err(NotADisk::BadFace(FaceId(99)))
+    );
+    let all: Vec<FaceId> = grid.faces().collect();
+    let info = check_chart_is_disk(&grid, &all).expect("a grid is a disk");
+    assert_eq!(
+        (info.num_faces, info.num_vertices, info.num_edges),
+        (8, 9, 16)
+    );
+    assert_eq!(info.num_boundary_edges, 8);
+}
+
+#[test]
+fn disk_check_on_grid_subsets() {
+    // 3×3 grid; cell (i, j) holds faces 2(3j + i) = [(i,j), (i+1,j), (i+1,j+1)] and
+    // 2(3j + i) + 1 = [(i,j), (i+1,j+1), (i,j+1)].
+    let grid = build(&fixtures::grid(3, 3));
+    let cell = |i: u32, j: u32| [FaceId(2 * (3 * j + i)), FaceId(2 * (3 * j + i) + 1)];
+    // Cells (0,0) and (1,1) joined by the lower triangle of cell (0,1), which is glued to both:
+    // the only face at vertex (1,1) outside the chart is the upper triangle of cell (1,0), one
+    // gap, so one fan, and the chart is a disk.
+    let mut faces = Vec::new();
+    faces.extend(cell(0, 0));
+    faces.extend(cell(1, 1));
+    faces.push(cell(0, 1)[0]);
+    let info = check_chart_is_disk(&grid, &faces).expect("a disk");
+    assert_eq!((info.num_faces, info.num_vertices), (5, 7));
+    // The ring of 8 cells around the centre cell is an annulus: χ = 0, two loops.
+    let ring: Vec<FaceId> = [
+        (0, 0),
+        (1, 0),
+        (2, 0),
+        (2, 1),
+        (2, 2),
+        (1, 2),
+        (0, 2),
+        (0, 1),
+    ]
+    .iter()
+    .flat_map(|&(i, j)| cell(i, j))
+    .collect();
+    assert_eq!(
+        check_chart_is_disk(&grid, &ring),
+        Err(NotADisk::Topology {
+            euler_characteristic: 0,
+            boundary_loops: 2
+        })
+    );
+    // Cells (0,0) and (1,1) alone touch at one vertex only: not glued, so disconnected.
+    let mut corner = Vec::new();
+    corner.extend(cell(0, 0));
+    corner.extend(cell(1, 1));
+    assert!(matches!(
+        check_chart_is_disk(&grid, &corner),
+        Err(NotADisk::Disconnected {
+            reached: 2,
+            faces: 4
+        })
+    ));
+}
+
+#[test]
+fn pinched_chart_is_reported_as_pinched() {
+    // A fan of 6 triangles around a centre vertex (a hexagon) minus two non-adjacent triangles
+    // leaves two runs at the centre, and the hexagon's rim would need the removed faces to
+    // connect them... Instead use a hexagonal fan ring of two layers: inner fan of 6 around the
+    // centre, outer ring glued to it. Remove inner triangles 0 and 3: the centre has two fans,
+    // and the chart is still connected through the outer ring.
+    let mut positions = vec![[0.0, 0.0, 0.0]];
+    for r in [1.0, 2.0] {
+        for k in 0..6 {
+            let a = std::f64::consts::PI / 3.0 * f64::from(k);
+            positions.push([r * a.cos(), r * a.sin(), 0.0]);
+        }
+    }
+    let inner = |k: u32| 1 + k % 6;
+    let outer = |k: u32| 7 + k % 6;
+    let mut tris = Vec::new();
+    for k in 0..6 {
+        tris.push([0, inner(k), inner(k + 1)]);
+    }
+    for k in 0..6 {
+        tris.push([inner(k), outer(k), outer(k + 1)]);
+        tris.push([inner(k), outer(k + 1), inner(k + 1)]);
+    }
+    let mesh = build(&MeshInput::single_group(positions, tris));
+    let faces: Vec<FaceId> = mesh.faces().filter(|f| f.0 != 0 && f.0 != 3).collect();
+    assert!(matches!(
+        check_chart_is_disk(&mesh, &faces),
+        Err(NotADisk::Pinched { fans: 2, .. })
+    ));
+    // segment_charts never returns such a chart; the whole hexagon is one flat chart.
+    let seg = segment(&mesh);
+    assert_contract(&mesh, &seg);
+}
+
+#[test]
+fn chart_mesh_maps_local_to_global() {
+    let mesh = build(&fixtures::grid(2, 2));
+    let faces = [FaceId(5), FaceId(2)];
+    let (cm, global) = chart_mesh(&mesh, &faces);
+    assert_eq!(cm.triangles.len(), 2);
+    for (t, &f) in cm.triangles.iter().zip(&faces) {
+        let g = mesh.face_vertices(f);
+        for k in 0..3 {
+            assert_eq!(global[t[k] as usize], g[k]);
+        }
+    }
+    let mut sorted = global.clone();
+    sorted.sort_unstable();
+    sorted.dedup();
+    assert_eq!(sorted.len(), global.len(), "no vertex twice");
+}
+
+#[test]
+fn invalid_options_are_rejected_with_the_option_name() {
+    let bad = [
+        (
+            SegmentOptions {
+                max_charts: Some(0),
+                ..Default::default()
+            },
+            "max_charts",
+        ),
+        (
+            SegmentOptions {
+                lscm: Lscm2002Options {
+                    feature_fraction: 0.0,
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+            "lscm.feature_fraction",
+        ),
+        (
+            SegmentOptions {
+                lscm: Lscm2002Options {
+                    max_string_length: 0,
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+            "lscm.max_string_length",
+        ),
+        (
+            SegmentOptions {
+                lscm: Lscm2002Options {
+                    merge_epsilon_fraction: f64::NAN,
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+            "lscm.merge_epsilon_fraction",
+        ),
+    ];
+    let mesh = build(&fixtures::grid(1, 1));
+    for (o, name) in bad {
+        match segment_charts(&mesh, &o) {
+            Err(SegmentError::InvalidOption { option, .. }) => assert_eq!(option, name),
+            other => panic!("{name}: {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn chart_cap_merges_while_disks_remain() {
+    let mesh = build(&subdivided_cube(4));
+    let free = segment(&mesh);
+    assert_eq!(free.num_charts(), 6);
+    let capped = segment_charts(
+        &mesh,
+        &SegmentOptions {
+            max_charts: Some(2),
+            ..Default::default()
+        },
+    )
+    .expect("valid");
+    assert_contract(&mesh, &capped);
+    // 6 sides can be merged into 2 disks (e.g. two "U" strips of 3 sides), and each merge keeps a
+    // disk, so the cap is reached.
+    assert!(capped.num_charts() <= 2, "{}", capped.num_charts());
+    assert_eq!(capped.stats.cap_merges, 6 - capped.num_charts());
+}
+
+#[test]
+fn distance_to_features_is_bounded_by_the_straight_line() {
+    // Flat 10×10 grid: no features, sources are the border faces. The face-graph distance of a
+    // face is a path through centroids ending at a border-edge midpoint, so it is at least the
+    // straight-line distance from its centroid to the square's border, and (a monotone path)
+    // at most twice that plus one cell diagonal.
+    let mesh = build(&fixtures::grid(10, 10));
+    let feats = detect_features(&mesh, &Lscm2002Options::default());
+    assert!(feats.threshold_rad.is_none(), "flat: no positive sharpness");
+    let d = distance_to_features(&mesh, &feats);
+    for f in mesh.faces() {
+        let p = mesh.face_positions(f);
+        let c = [0, 1].map(|k| (p[0][k] + p[1][k] + p[2][k]) / 3.0);
+        let to_border = c[0].min(10.0 - c[0]).min(c[1]).min(10.0 - c[1]);
+        let x = d[f.index()];
+        assert!(x >= to_border - 1e-12, "{f:?}: {x} < {to_border}");
+        assert!(x <= 2.0 * to_border + 2f64.sqrt(), "{f:?}: {x}");
+    }
+}
+
+fn noisy_grid(nx: u32, ny: u32, noise: &[f64], holes: &[bool]) -> MeshInput {
+    let mut g = fixtures::grid(nx, ny);
+    for (i, p) in g.positions_m.iter_mut().enumerate() {
+        p[2] = noise[i % noise.len()];
+    }
+    let tris: Vec<[u32; 3]> = g
+        .triangles
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !holes[i % holes.len()])
+        .map(|(_, t)| *t)
+        .collect();
+    if tris.is_empty() {
+        g.triangles.truncate(1);
+    } else {
+        g.triangles = tris;
+    }
+    g
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+    #[test]
+    fn random_meshes_give_disk_charts(
+        nx in 1u32..9,
+        ny in 1u32..9,
+        noise in proptest::collection::vec(-0.8f64..0.8, 1..40),
+        holes in proptest::collection::vec(proptest::bool::weighted(0.15), 1..30),
+        bend in proptest::bool::ANY,
+    ) {
+        let input = if bend {
+            // A bent tube part: a torus with noise exercises closed surfaces with handles.
+            let mut t = fixtures::torus(nx + 3, ny + 3, 2.0, 0.7);
+            for (i, p) in t.positions_m.iter_mut().enumerate() {
+                p[2] += 0.1 * noise[i % noise.len()];
+            }
+            t
+        } else {
+            noisy_grid(nx, ny, &noise, &holes)
+        };
+        let mesh = build(&input);
+        let opts = SegmentOptions {
+            lscm: Lscm2002Options { min_feature_length: 2, ..Default::default() },
+            ..Default::default()
+        };
+        let seg = segment_charts(&mesh, &opts).expect("valid options");
+        assert_contract(&mesh, &seg);
+    }
+}
+
+/// A helical ramp: `turns` turns of an annulus strip between radii 1 and 2, rising by `rise_m`
+/// per turn. Almost planar, so its conformal flattening is close to an annulus sector of
+/// `turns · 360°`, which overlaps itself when `turns > 1`.
+fn helix_strip(turns: f64, n_around: u32, n_across: u32, rise_m: f64) -> MeshInput {
+    let mut positions = Vec::new();
+    for i in 0..=n_around {
+        let t = turns * f64::from(i) / f64::from(n_around);
+        let a = 2.0 * std::f64::consts::PI * t;
+        for j in 0..=n_across {
+            let r = 1.0 + f64::from(j) / f64::from(n_across);
+            positions.push([r * a.cos(), r * a.sin(), rise_m * t]);
+        }
+    }
+    let id = |i: u32, j: u32| i * (n_across + 1) + j;
+    let mut tris = Vec::new();
+    for i in 0..n_around {
+        for j in 0..n_across {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            tris.push([a, c, b]);
+            tris.push([a, d, c]);
+        }
+    }
+    MeshInput::single_group(positions, tris)
+}
+
+/// Brute force over all pairs of non-adjacent boundary edges: independent of the grid.
+fn brute_force_crossing(cm: &crate::atlas::parameterize::ChartMesh, uv: &[[f64; 2]]) -> bool {
+    let mut directed = Vec::new();
+    for t in &cm.triangles {
+        for s in 0..3 {
+            directed.push((t[s], t[(s + 1) % 3]));
+        }
+    }
+    let set: std::collections::BTreeSet<(u32, u32)> = directed.iter().copied().collect();
+    let segs: Vec<(u32, u32)> = directed
+        .into_iter()
+        .filter(|&(a, b)| !set.contains(&(b, a)))
+        .collect();
+    let o = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
+        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    };
+    for (i, &(a, b)) in segs.iter().enumerate() {
+        for &(c, d) in &segs[i + 1..] {
+            if a == c || a == d || b == c || b == d {
+                continue;
+            }
+            let (pa, pb, pc, pd) = (
+                uv[a as usize],
+                uv[b as usize],
+                uv[c as usize],
+                uv[d as usize],
+            );
+            if o(pa, pb, pc) * o(pa, pb, pd) < 0.0 && o(pc, pd, pa) * o(pc, pd, pb) < 0.0 {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+fn area_ratio(cm: &crate::atlas::parameterize::ChartMesh, uv: &[[f64; 2]]) -> f64 {
+    let mut lo = f64::INFINITY;
+    let mut hi = 0.0f64;
+    for t in &cm.triangles {
+        let [a, b, c] = t.map(|i| cm.positions_m[i as usize]);
+        let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let ac = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        // Heron-free: |ab|²|ac|² − (ab·ac)² = |ab × ac|².
+        let dot = ab[0] * ac[0] + ab[1] * ac[1] + ab[2] * ac[2];
+        let n2 = (ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2])
+            * (ac[0] * ac[0] + ac[1] * ac[1] + ac[2] * ac[2]);
+        let a3 = 0.5 * (n2 - dot * dot).max(0.0).sqrt();
+        let [p, q, r] = t.map(|i| uv[i as usize]);
+        let a2 = 0.5 * ((q[0] - p[0]) * (r[1] - p[1]) - (r[0] - p[0]) * (q[1] - p[1]));
+        lo = lo.min(a3 / a2);
+        hi = hi.max(a3 / a2);
+    }
+    hi / lo
+}
+
+#[test]
+fn validation_splits_a_self_overlapping_helix_strip() {
+    let mesh = build(&helix_strip(1.6, 96, 4, 0.05));
+    let all: Vec<FaceId> = mesh.faces().collect();
+    let one = finish(&mesh, vec![all.clone()], SegmentStats::default());
+    // The whole strip, flattened, overlaps itself (checked by brute force).
+    let (cm, _) = chart_mesh(&mesh, &all);
+    let map = crate::atlas::parameterize::parameterize_chart(&cm, &Default::default())
+        .expect("the strip is a disk");
+    assert!(
+        brute_force_crossing(&cm, &map.uv),
+        "test premise: the strip overlaps"
+    );
+    assert!(validate::boundary_crossing(&cm, &map.uv).is_some());
+    let opts = ValidateOptions {
+        max_area_ratio: None,
+        ..Default::default()
+    };
+    let v = validate_charts(&mesh, &one, &opts).expect("valid options");
+    assert!(v.splits[1] >= 1, "{:?}", v.splits);
+    assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
+    assert_contract(&mesh, &v.segmentation);
+    for (c, m) in v.segmentation.charts.iter().zip(&v.maps) {
+        let (cm, _) = chart_mesh(&mesh, c);
+        let (map, _) = m.as_ref().expect("parameterized");
+        assert!(map.flipped_faces.is_empty());
+        assert!(!brute_force_crossing(&cm, &map.uv));
+    }
+}
+
+#[test]
+fn validation_bounds_the_area_ratio() {
+    // A hemisphere flattened conformally shrinks its rim relative to its pole by far more than 2.
+    let mesh = build(&fixtures::uv_sphere(16, 24, 1.0));
+    let north: Vec<FaceId> = mesh
+        .faces()
+        .filter(|&f| mesh.face_positions(f).iter().all(|p| p[2] >= -1e-12))
+        .collect();
+    let south: Vec<FaceId> = mesh
+        .faces()
+        .filter(|f| north.binary_search(f).is_err())
+        .collect();
+    let seg = finish(&mesh, vec![north.clone(), south], SegmentStats::default());
+    let (cm, _) = chart_mesh(&mesh, &north);
+    let map = crate::atlas::parameterize::parameterize_chart(&cm, &Default::default())
+        .expect("a hemisphere is a disk");
+    assert!(area_ratio(&cm, &map.uv) > 2.0, "test premise");
+    let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid options");
+    assert!(v.splits[2] >= 2, "{:?}", v.splits);
+    assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
+    // Bookkeeping: every split adds a chart (the disk guarantee may add more), every merge
+    // removes one.
+    let extra = v.segmentation.stats.disk_splits - seg.stats.disk_splits;
+    assert_eq!(
+        v.segmentation.num_charts(),
+        2 + v.splits.iter().sum::<usize>() + extra - v.merges
+    );
+    assert_contract(&mesh, &v.segmentation);
+    for (c, m) in v.segmentation.charts.iter().zip(&v.maps) {
+        let (cm, _) = chart_mesh(&mesh, c);
+        let (map, _) = m.as_ref().expect("parameterized");
+        let r = area_ratio(&cm, &map.uv);
+        assert!(r <= 2.0 + 1e-9, "chart of {} faces has ratio {r}", c.len());
+    }
+}
+
+#[test]
+fn validation_reports_unparameterizable_charts_and_rejects_bad_ratio() {
+    let mesh = build(&fixtures::degenerate());
+    let seg = segment(&mesh);
+    let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid");
+    assert_contract(&mesh, &v.segmentation);
+    // Face 2 is zero-area: its chart cannot be flattened and is reported, not dropped.
+    let c2 = v.segmentation.face_chart[FaceId(2)].index();
+    assert!(v
+        .unresolved
+        .iter()
+        .any(|(c, d)| *c == c2 && matches!(d, ChartDefect::Unparameterizable(_))));
+    assert!(v.maps[c2].is_none());
+    let bad = ValidateOptions {
+        max_area_ratio: Some(0.5),
+        ..Default::default()
+    };
+    assert!(matches!(
+        validate_charts(&mesh, &seg, &bad),
+        Err(SegmentError::InvalidOption {
+            option: "max_area_ratio",
+            ..
+        })
+    ));
+}
