@@ -1,6 +1,11 @@
 //! `texatlas bench …`
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+
+use anyhow::Context as _;
+use texatlas::atlas::parameterize::ChartMesh;
+use texatlas::atlas::segment::{chart_mesh, check_chart_is_disk};
+use texatlas::mesh::TriangleMesh;
 
 use texatlas::bench::parameterize::{
     format_table, height_field, read_chart, run_bench, run_method, BenchMethod,
@@ -29,6 +34,10 @@ pub struct ParameterizeArgs {
     /// Print JSON (one array of rows) instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Flatten the triangle mesh of this glTF asset instead of the generated height fields
+    /// (repeatable). Its triangles, welded by position, must form one topological disk.
+    #[arg(long)]
+    pub input: Vec<PathBuf>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -49,11 +58,17 @@ pub fn run(command: &BenchCommand) -> anyhow::Result<ExitCode> {
     match command {
         BenchCommand::Parameterize(args) => {
             let exe = std::env::current_exe()?;
-            let charts: Vec<_> = args
-                .sizes
-                .iter()
-                .map(|&n| (format!("heightfield-{n}"), height_field(n)))
-                .collect();
+            let charts: Vec<_> = if args.input.is_empty() {
+                args.sizes
+                    .iter()
+                    .map(|&n| (format!("heightfield-{n}"), height_field(n)))
+                    .collect()
+            } else {
+                args.input
+                    .iter()
+                    .map(|path| disk_chart(path))
+                    .collect::<anyhow::Result<_>>()?
+            };
             let json = args.json;
             let rows = run_bench(&exe, &charts, &args.methods, args.cg_timeout_s, |row| {
                 if !json {
@@ -83,4 +98,26 @@ pub fn run(command: &BenchCommand) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
     }
+}
+
+/// The whole triangle mesh of a glTF asset as one chart, labelled by its file name; an error
+/// (saying why) unless its welded triangles form one topological disk.
+fn disk_chart(path: &Path) -> anyhow::Result<(String, ChartMesh)> {
+    let loaded = super::load::load_asset(path)?;
+    let built = TriangleMesh::build(loaded.asset.mesh_input())
+        .with_context(|| format!("building the mesh of {}", path.display()))?;
+    let faces: Vec<_> = built.mesh.faces().collect();
+    check_chart_is_disk(&built.mesh, &faces).with_context(|| {
+        format!(
+            "{} is not one topological disk, so it cannot be flattened as one chart; \
+             give a disk-shaped mesh (one connected piece, one boundary loop, no handles)",
+            path.display()
+        )
+    })?;
+    let (chart, _) = chart_mesh(&built.mesh, &faces);
+    let label = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.display().to_string());
+    Ok((label, chart))
 }
