@@ -22,7 +22,9 @@
 //!   defects and the repair policy. Depends on nothing else in the crate.
 //! - [`numerics`]: sparse assembly, preconditioned CG, sparse Cholesky (faer, behind one module).
 //!   Knows nothing of meshes.
-//! - [`atlas`]: the pipeline. Today: chart parameterization (LSCM, progressive mesh, HLSCM).
+//! - [`atlas`]: the pipeline. Today: segmentation into disk-shaped charts with validation
+//!   (LSCM paper §3) and chart parameterization (LSCM, progressive mesh, HLSCM). Packing, the
+//!   report and `atlas::generate` come next.
 //! - [`gltf_io`]: the only module that knows glTF: decode (with JSON paths for every defect) and
 //!   encode (split vertices at UV seams, carry everything else through).
 //! - [`bench`]: `texatlas bench` measurements (not core: uses time, processes, files).
