@@ -27,7 +27,7 @@
 //!   report and `atlas::generate` come next.
 //! - [`gltf_io`]: the only module that knows glTF: decode (with JSON paths for every defect) and
 //!   encode (split vertices at UV seams, carry everything else through).
-//! - [`bench`]: `texatlas bench` measurements (not core: uses time, processes, files).
+//! - [`bench`](mod@bench): `texatlas bench` measurements (not core: uses time, processes, files).
 //! - [`inspect`]: the `texatlas inspect` report (plain data, built from `gltf_io` + `mesh`).
 //! - [`api`]: the only serde wire types, each mirroring a document in `proto/`, with explicit
 //!   `From` conversions from the domain types.

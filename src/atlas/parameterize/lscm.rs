@@ -27,7 +27,7 @@
 //! is twice `Σ_T ∫_T |∂U/∂x + i ∂U/∂y|² dA`), in model units squared when UVs are in model
 //! units. It is recomputed from UVs through per-triangle gradients, independently of the solver.
 //!
-//! Units: positions `_m`, UVs in model units before packing (not yet normalized to [0,1]).
+//! Units: positions `_m`, UVs in model units before packing (not yet normalized to \[0,1\]).
 //! Invariant: a system is only assembled from a chart that passed
 //! [`super::chart::ChartMesh::validate`], so every `d_T > 0`.
 use std::ops::ControlFlow;

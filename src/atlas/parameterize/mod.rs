@@ -13,7 +13,7 @@
 //!   reduction trees in `numerics`, sequential faer, sequential progressive-mesh construction).
 //!
 //! Units: positions in model units (`_m`); UVs in model units (the second pin sits at the
-//! pins' path length from the first), NOT yet normalized to [0,1]: packing does that.
+//! pins' path length from the first), NOT yet normalized to \[0,1\]: packing does that.
 //!
 //! Code map: [`chart`] (input and validation), [`lscm`] (the LSCM system, §2),
 //! [`progressive_mesh`] (half-edge collapses, hlscm-2003 §4), [`hlscm`] (cascadic multigrid,

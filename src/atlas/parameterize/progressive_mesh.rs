@@ -8,7 +8,7 @@
 //! in every face; the two (interior) or one (boundary) faces on the edge disappear. Vertices
 //! never move, which is what makes the operation list easy to replay.
 //!
-//! "Validity of hcoll" (§4), each check in [`Decimator::best_collapse`]:
+//! "Validity of hcoll" (§4), each check in `Decimator::best_collapse`:
 //! - manifold: the link condition (the common neighbours of `u` and `v` are exactly the
 //!   opposite vertices of the faces on the edge);
 //! - no flip: every face that survives keeps its normal on the same side (`n_old·n_new > 0`) and
@@ -20,14 +20,14 @@
 //!   (70 degrees in the examples shown here)": `2π − Σθ` inside, `π − Σθ` on the boundary
 //!   (the turning angle, so chart corners are kept).
 //!
-//! "Halfedge geometric importance" (§4), in [`Decimator::best_collapse`]: the sum of
+//! "Halfedge geometric importance" (§4), in `Decimator::best_collapse`: the sum of
 //! - the volume difference (the volume swept by the faces of `u` moving to `v`,
 //!   `Σ |det(a−u, b−u, v−u)|/6`), as its cube root;
 //! - the area difference when the half-edge is on the border (the triangle between the old
 //!   boundary `w–u–v` and the new `w–v`), as its square root;
 //! - the accumulated loss of quality on merged vertices: each vertex carries the largest loss
 //!   merged into it so far (`acc(v) ← max(acc(v), acc(u) + loss)`), our reading of the
-//!   "global error management" of the paper's reference [4].
+//!   "global error management" of the paper's reference \[4\].
 //!
 //! "Note that to have compatible dimensions, these parameters are normalized (cube root for
 //! volume and square root for area)": all three terms are lengths in model units.
