@@ -3,6 +3,7 @@
 //! recomputed independently of the solvers.
 use std::ops::ControlFlow;
 
+use texatlas::atlas::parameterize::test_meshes::spherical_cap as cap;
 use texatlas::atlas::parameterize::{
     parameterize_chart, parameterize_chart_with_monitor, ChartMesh, HlscmOptions,
     ParameterizeError, ParameterizeMethod, ParameterizeOptions,
@@ -22,33 +23,6 @@ fn grid(n: usize, height: impl Fn(f64, f64) -> f64) -> ChartMesh {
         for i in 0..n {
             triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
             triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    ChartMesh {
-        positions_m,
-        triangles,
-    }
-}
-
-/// Spherical cap of the unit sphere up to polar angle `max_polar_rad`, as a disk.
-fn cap(segments: usize, rings: usize, max_polar_rad: f64) -> ChartMesh {
-    let mut positions_m = vec![[0.0, 0.0, 1.0]];
-    for j in 1..=rings {
-        let t = max_polar_rad * j as f64 / rings as f64;
-        for i in 0..segments {
-            let a = 2.0 * std::f64::consts::PI * i as f64 / segments as f64;
-            positions_m.push([t.sin() * a.cos(), t.sin() * a.sin(), t.cos()]);
-        }
-    }
-    let id = |i: usize, j: usize| (1 + (j - 1) * segments + (i % segments)) as u32;
-    let mut triangles = Vec::new();
-    for i in 0..segments {
-        triangles.push([0, id(i, 1), id(i + 1, 1)]);
-    }
-    for j in 1..rings {
-        for i in 0..segments {
-            triangles.push([id(i, j), id(i, j + 1), id(i + 1, j + 1)]);
-            triangles.push([id(i, j), id(i + 1, j + 1), id(i + 1, j)]);
         }
     }
     ChartMesh {

@@ -22,8 +22,7 @@ pub mod chart;
 pub mod hlscm;
 pub mod lscm;
 pub mod progressive_mesh;
-#[cfg(test)]
-pub(crate) mod test_meshes;
+pub mod test_meshes;
 
 use std::ops::ControlFlow;
 

@@ -1,4 +1,5 @@
-//! Disk-shaped (and a few non-disk) meshes generated in code for the unit tests.
+//! Disk-shaped (and a few non-disk) meshes generated in code: test data for the unit tests, the
+//! oracle tests in `tests/` and benchmarks. Not part of the pipeline.
 use super::chart::ChartMesh;
 
 /// An `nx × ny` quad grid over `[0,nx]×[0,ny]`, each quad split along its (0,0)-(1,1)
@@ -55,9 +56,16 @@ pub fn open_cylinder(segments: usize, rings: usize, cut: bool) -> ChartMesh {
 /// A hemisphere of radius 1 (the upper half, pole at +z), as a latitude-longitude mesh with
 /// a pole fan: a disk whose boundary is the equator.
 pub fn hemisphere(segments: usize, rings: usize) -> ChartMesh {
+    spherical_cap(segments, rings, std::f64::consts::FRAC_PI_2)
+}
+
+/// The cap of the unit sphere from the pole (+z) down to polar angle `max_polar_rad`, as a
+/// latitude-longitude mesh with a pole fan: a disk (for `max_polar_rad < π`) whose boundary is
+/// the lowest ring.
+pub fn spherical_cap(segments: usize, rings: usize, max_polar_rad: f64) -> ChartMesh {
     let mut positions_m = vec![[0.0, 0.0, 1.0]];
     for j in 1..=rings {
-        let polar = std::f64::consts::FRAC_PI_2 * j as f64 / rings as f64;
+        let polar = max_polar_rad * j as f64 / rings as f64;
         for i in 0..segments {
             let a = 2.0 * std::f64::consts::PI * i as f64 / segments as f64;
             positions_m.push([polar.sin() * a.cos(), polar.sin() * a.sin(), polar.cos()]);
