@@ -3,58 +3,20 @@
 //! recomputed independently of the solvers.
 use std::ops::ControlFlow;
 
-use texatlas::atlas::parameterize::test_meshes::spherical_cap as cap;
+use texatlas::atlas::parameterize::test_meshes::{
+    self, cotan_conformal_energy as cotan_energy, spherical_cap as cap,
+};
 use texatlas::atlas::parameterize::{
     parameterize_chart, parameterize_chart_with_monitor, ChartMesh, HlscmOptions,
     ParameterizeError, ParameterizeMethod, ParameterizeOptions,
 };
 
+/// An `n × n` grid over the unit square lifted to the height field `height(x, y)`.
 fn grid(n: usize, height: impl Fn(f64, f64) -> f64) -> ChartMesh {
-    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    let mut positions_m = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            let (x, y) = (i as f64 / n as f64, j as f64 / n as f64);
-            positions_m.push([x, y, height(x, y)]);
-        }
-    }
-    let mut triangles = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    ChartMesh {
-        positions_m,
-        triangles,
-    }
-}
-
-/// Conformal energy via cotangent Dirichlet energy minus the signed UV area (×2 for the
-/// paper's convention): shares no code with the crate.
-fn cotan_energy(chart: &ChartMesh, uv: &[[f64; 2]]) -> f64 {
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let mut e = 0.0;
-    for t in &chart.triangles {
-        let p = t.map(|i| chart.positions_m[i as usize]);
-        let q = t.map(|i| uv[i as usize]);
-        for k in 0..3 {
-            let (i, j, o) = (k, (k + 1) % 3, (k + 2) % 3);
-            let (a, b) = (sub(p[i], p[o]), sub(p[j], p[o]));
-            let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-            let c = [
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            ];
-            let cot = dot / (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
-            let (du, dv) = (q[i][0] - q[j][0], q[i][1] - q[j][1]);
-            e += 0.5 * cot * (du * du + dv * dv);
-        }
-        e -= (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1]);
-    }
-    2.0 * e
+    test_meshes::grid(n, n, |i, j| {
+        let (x, y) = (i / n as f64, j / n as f64);
+        [x, y, height(x, y)]
+    })
 }
 
 fn signed_areas(chart: &ChartMesh, uv: &[[f64; 2]]) -> Vec<f64> {

@@ -403,7 +403,9 @@ fn fetch3<T: Copy>(values: &[T], t: &[u32; 3]) -> Option<[T; 3]> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_meshes::{grid, hemisphere, noisy_height_field, open_cylinder};
+    use super::super::test_meshes::{
+        cotan_conformal_energy as cotan_energy, grid, hemisphere, noisy_height_field, open_cylinder,
+    };
     use super::*;
 
     fn solve(chart: &ChartMesh) -> (LscmSystem, Vec<[f64; 2]>, f64) {
@@ -413,30 +415,6 @@ mod tests {
         let x = sys.solve_direct().expect("solve");
         let e = sys.energy(&x).expect("energy");
         (sys.clone(), sys.uv_from_solution(&x), e)
-    }
-
-    /// Dirichlet energy minus twice the signed UV area, via cotangent weights: a formula for
-    /// `C(U)/2` that shares no code with the solver nor with [`conformal_energy`]
-    /// (∫|∇u|²+|∇v|² − 2·det J = ∫|∂U/∂x + i∂U/∂y|²).
-    fn cotan_energy(chart: &ChartMesh, uv: &[[f64; 2]]) -> f64 {
-        let mut e = 0.0;
-        for t in &chart.triangles {
-            let p = t.map(|i| chart.positions_m[i as usize]);
-            let q = t.map(|i| uv[i as usize]);
-            for k in 0..3 {
-                let (i, j, o) = (k, (k + 1) % 3, (k + 2) % 3);
-                let a = sub(p[i], p[o]);
-                let b = sub(p[j], p[o]);
-                let cot = dot3(a, b) / norm3(cross(a, b));
-                let du = q[i][0] - q[j][0];
-                let dv = q[i][1] - q[j][1];
-                e += 0.5 * cot * (du * du + dv * dv);
-            }
-            let signed = (q[1][0] - q[0][0]) * (q[2][1] - q[0][1])
-                - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1]);
-            e -= signed; // 2 × (signed area = signed/2)
-        }
-        2.0 * e
     }
 
     #[test]

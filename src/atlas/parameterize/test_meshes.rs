@@ -1,5 +1,6 @@
-//! Disk-shaped (and a few non-disk) meshes generated in code: test data for the unit tests, the
-//! oracle tests in `tests/` and benchmarks. Not part of the pipeline.
+//! Disk-shaped (and a few non-disk) meshes generated in code, and an independent energy oracle:
+//! test support for the unit tests, the oracle tests in `tests/` and benchmarks. Not part of the
+//! pipeline.
 use super::chart::ChartMesh;
 
 /// An `nx × ny` quad grid over `[0,nx]×[0,ny]`, each quad split along its (0,0)-(1,1)
@@ -105,4 +106,32 @@ pub fn noisy_height_field(n: usize, noise: f64, seed: u64) -> ChartMesh {
         let bump = 0.3 * ((x * s * 3.0).sin() * (y * s * 2.0).cos());
         [x * s, y * s, bump + noise * s * heights[k]]
     })
+}
+
+/// The conformal energy `C(U)` recomputed as an oracle: twice the cotangent Dirichlet energy
+/// minus twice the signed UV area (∫|∇u|²+|∇v|² − 2·det J = ∫|∂U/∂x + i∂U/∂y|²). It shares no
+/// code with the solver nor with [`super::conformal_energy`], so tests can compare the two.
+pub fn cotan_conformal_energy(chart: &ChartMesh, uv: &[[f64; 2]]) -> f64 {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let mut e = 0.0;
+    for t in &chart.triangles {
+        let p = t.map(|i| chart.positions_m[i as usize]);
+        let q = t.map(|i| uv[i as usize]);
+        for k in 0..3 {
+            let (i, j, o) = (k, (k + 1) % 3, (k + 2) % 3);
+            let (a, b) = (sub(p[i], p[o]), sub(p[j], p[o]));
+            let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+            let c = [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ];
+            let cot = dot / (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+            let (du, dv) = (q[i][0] - q[j][0], q[i][1] - q[j][1]);
+            e += 0.5 * cot * (du * du + dv * dv);
+        }
+        // 2 × signed area (the cross product is twice the area).
+        e -= (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1]);
+    }
+    2.0 * e
 }
