@@ -9,5 +9,7 @@
 //!
 //! Invariant: no IO, no serde, no wall-clock time, no logging; same input, same output bits
 //! whatever the thread count (`tests/architecture.rs` checks the `use` lines).
+pub mod measure;
+pub mod pack;
 pub mod parameterize;
 pub mod segment;

@@ -1,0 +1,119 @@
+//! Packing: place flattened charts on texture pages (issue 5).
+//!
+//! INTERFACE SKELETON — the implementation (horizon packer of lscm-2002 §4 extended as
+//! isocharts-2004 §6) lands with issue 5; until then `pack_charts` is not callable from the
+//! product (nothing in `atlas::generate` ships before it is done).
+//!
+//! Units: chart UVs come in model units (as the parameterizer returns them); placed UVs are
+//! normalized page coordinates in \[0,1\]² (u right, v down, glTF convention); sizes on the page
+//! are in texels (`_texels`); densities in texels per model unit.
+use std::ops::ControlFlow;
+
+/// How big charts are on the page.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TexelDensity {
+    /// The largest uniform density at which every chart fits on one page. The default.
+    FitToPage,
+    /// A fixed density in texels per model unit (`> 0`, finite); more pages open when the charts
+    /// do not fit on one.
+    TexelsPerUnit(f64),
+}
+
+/// Options of [`pack_charts`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PackOptions {
+    /// Page width in texels, `>= 1`. Default 1024.
+    pub width_texels: u32,
+    /// Page height in texels, `>= 1`. Default 1024.
+    pub height_texels: u32,
+    /// Empty texels kept between any two charts and between a chart and the page edge. Default 2.
+    pub padding_texels: u32,
+    /// Texel density. Default [`TexelDensity::FitToPage`].
+    pub density: TexelDensity,
+    /// Rotations tried per chart, evenly spaced over a full turn after orienting the chart's
+    /// maximum diameter vertically; `1` means the diameter-vertical orientation only. `>= 1`.
+    /// Default 16 (isocharts-2004 §6).
+    pub rotations: u32,
+}
+
+impl Default for PackOptions {
+    fn default() -> Self {
+        Self {
+            width_texels: 1024,
+            height_texels: 1024,
+            padding_texels: 2,
+            density: TexelDensity::FitToPage,
+            rotations: 16,
+        }
+    }
+}
+
+/// One flattened chart to place.
+#[derive(Debug, Clone, Copy)]
+pub struct PackChart<'a> {
+    /// UV per chart vertex in model units (any similarity of the final shape).
+    pub uv: &'a [[f64; 2]],
+    /// Triangles as indices into `uv`.
+    pub triangles: &'a [[u32; 3]],
+    /// The chart's 3-D surface area, model units². With `uv` it fixes the chart's scale:
+    /// placed UV area = area_m2 × density² (in texels²).
+    pub area_m2: f64,
+}
+
+/// A placed chart.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlacedChart {
+    /// The page it is on, `0..Packing::num_pages`.
+    pub page: u32,
+    /// UV per chart vertex, normalized page coordinates in \[0,1\]².
+    pub uv: Vec<[f64; 2]>,
+}
+
+/// The result of [`pack_charts`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Packing {
+    /// One entry per input chart, same order.
+    pub charts: Vec<PlacedChart>,
+    /// Pages used (1 with [`TexelDensity::FitToPage`]).
+    pub num_pages: u32,
+    /// The density used, texels per model unit.
+    pub texels_per_unit: f64,
+}
+
+/// Errors of [`pack_charts`]; each says what to change.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PackError {
+    /// An option has a meaningless value.
+    #[error("invalid packing option `{option}`: {detail}")]
+    InvalidOption {
+        /// The option's name, e.g. `padding_texels`.
+        option: &'static str,
+        /// What is wrong and what to use instead.
+        detail: String,
+    },
+    /// A chart cannot fit on a page even alone.
+    #[error("chart {chart} needs {needed_texels:?} texels (with padding) but a page has {page_texels:?}; lower texels_per_unit or raise the resolution")]
+    ChartTooLarge {
+        /// Index of the chart.
+        chart: usize,
+        /// Width and height it needs.
+        needed_texels: [u64; 2],
+        /// Page size.
+        page_texels: [u32; 2],
+    },
+    /// The monitor asked to stop.
+    #[error("packing was cancelled")]
+    Cancelled,
+}
+
+/// Places every chart on pages without overlap, keeping `padding_texels` between charts and from
+/// the page edge, all UVs in \[0,1\]. `monitor((done, total))` is called between charts; `Break`
+/// cancels with [`PackError::Cancelled`].
+pub fn pack_charts(
+    charts: &[PackChart<'_>],
+    options: &PackOptions,
+    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
+) -> Result<Packing, PackError> {
+    let _ = (charts, options, monitor);
+    unimplemented!("issue 5: horizon packer")
+}
