@@ -1,15 +1,277 @@
 //! The atlas pipeline: pure, synchronous and deterministic.
 //!
-//! Stages, each a function of the previous stage's output and its own options:
-//! - [`segment`]: `segment_charts` cuts a [`crate::mesh::TriangleMesh`] into charts that are each
-//!   a topological disk (Lévy et al. 2002 §3.1–3.2), and `validate_charts` flattens them and
-//!   splits those with flips, UV boundary crossings or too much area distortion (§3.3).
+//! [`generate`] is the one call that joins the geometry core to the service and the CLI:
+//! segment → parameterize + validate → pack → measure. Each stage is a function of the previous
+//! stage's output and its own options:
+//! - [`segment`]: `segment_charts` cuts a [`TriangleMesh`] into charts that are each a topological
+//!   disk (Lévy et al. 2002 §3.1–3.2), and `validate_charts` flattens them with [`parameterize`]
+//!   and splits those with flips, UV boundary crossings or too much area distortion (§3.3);
 //! - [`parameterize`]: flattens one chart (LSCM, Lévy et al. 2002 §2; hierarchical LSCM, Ray &
-//!   Lévy 2003).
+//!   Lévy 2003);
+//! - [`pack`]: places the flattened charts on texture pages at one texel density, with padding
+//!   (the horizon packer, Lévy et al. 2002 §4, from four directions with rotations, Zhou et al.
+//!   2004 §6);
+//! - [`measure`]: the quality report, with the definitions of the independent evaluator.
 //!
 //! Invariant: no IO, no serde, no wall-clock time, no logging; same input, same output bits
-//! whatever the thread count (`tests/architecture.rs` checks the `use` lines).
+//! whatever the thread count (`tests/architecture.rs` checks the `use` lines). Stage timings are
+//! measured by the caller through [`Progress`].
 pub mod measure;
+pub mod options;
 pub mod pack;
 pub mod parameterize;
+pub mod progress;
 pub mod segment;
+
+use std::ops::ControlFlow;
+
+pub use measure::{measure_atlas, AtlasReport, MeasureInput};
+pub use options::AtlasOptions;
+pub use pack::{pack_charts, PackChart, PackError, PackOptions, TexelDensity};
+pub use progress::{NoProgress, Progress, Stage};
+
+use crate::mesh::{TriangleMesh, VertexId};
+use segment::{segment_charts, validate_charts, ChartDefect, SegmentError};
+
+/// Errors of [`generate`]. Each says what is wrong and how to fix it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AtlasError {
+    /// An option has a meaningless value.
+    #[error("invalid option `{option}`: {detail}")]
+    InvalidOption {
+        /// The option's name, as on the wire (e.g. `padding_texels`).
+        option: &'static str,
+        /// What is wrong and what to use instead.
+        detail: String,
+    },
+    /// The caller's [`Progress`] asked to stop.
+    #[error("cancelled during the {} stage", .stage.name())]
+    Cancelled {
+        /// The stage that was running.
+        stage: Stage,
+    },
+    /// A chart could not be flattened (e.g. all its triangles have zero area).
+    #[error("chart {chart} ({faces} faces) could not be flattened: {detail}; repair or remove the degenerate triangles")]
+    Unparameterizable {
+        /// Index of the chart in the validated segmentation.
+        chart: usize,
+        /// Its face count.
+        faces: usize,
+        /// The parameterizer's reason.
+        detail: String,
+    },
+    /// Packing failed (e.g. one chart is larger than a page at the requested density).
+    #[error("packing failed: {0}")]
+    Pack(PackError),
+}
+
+impl From<SegmentError> for AtlasError {
+    fn from(e: SegmentError) -> Self {
+        match e {
+            SegmentError::InvalidOption { option, detail } => {
+                AtlasError::InvalidOption { option, detail }
+            }
+        }
+    }
+}
+
+impl From<PackError> for AtlasError {
+    fn from(e: PackError) -> Self {
+        match e {
+            PackError::InvalidOption { option, detail } => {
+                AtlasError::InvalidOption { option, detail }
+            }
+            PackError::Cancelled => AtlasError::Cancelled { stage: Stage::Pack },
+            other => AtlasError::Pack(other),
+        }
+    }
+}
+
+/// Counters of one [`generate`] run.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PipelineStats {
+    /// Charts proposed by segmentation (after its disk guarantee).
+    pub segmented_charts: usize,
+    /// Splits made by validation: flips, UV boundary overlaps, area ratio.
+    pub validation_splits: [usize; 3],
+    /// Small charts merged back by validation.
+    pub validation_merges: usize,
+    /// Charts kept although their area ratio is above the threshold (could not be split).
+    pub area_ratio_unresolved: usize,
+    /// Charts flattened by the direct solve and by HLSCM.
+    pub charts_direct: usize,
+    /// See `charts_direct`.
+    pub charts_hierarchical: usize,
+    /// The texel density used, texels per model unit.
+    pub texels_per_unit: f64,
+}
+
+/// The atlas of one mesh.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Atlas {
+    /// UVs of the 3 corners of each face of the mesh, in face and corner order: normalized page
+    /// coordinates in \[0,1\]², as the `f32` values to be written to the file.
+    pub corner_uvs: Vec<[[f32; 2]; 3]>,
+    /// The chart of each face (index into the validated charts, ordered by lowest face).
+    pub face_chart: Vec<u32>,
+    /// The page of each chart.
+    pub chart_page: Vec<u32>,
+    /// The page of each face.
+    pub face_page: Vec<u32>,
+    /// Pages used.
+    pub num_pages: u32,
+    /// What happened on the way.
+    pub stats: PipelineStats,
+    /// The quality report, measured on `corner_uvs`.
+    pub report: AtlasReport,
+}
+
+/// Runs the whole pipeline on `mesh`: segment → parameterize + validate → pack → measure.
+///
+/// Progress is reported per stage through `progress`, which can cancel at every checkpoint
+/// ([`AtlasError::Cancelled`]). Deterministic: the same mesh and options give the same bits.
+///
+/// Errors: [`AtlasError::InvalidOption`] before any work; [`AtlasError::Unparameterizable`] when a
+/// chart has no usable map; [`AtlasError::Pack`] when packing cannot place a chart.
+pub fn generate(
+    mesh: &TriangleMesh,
+    options: &AtlasOptions,
+    progress: &mut dyn Progress,
+) -> Result<Atlas, AtlasError> {
+    options.check()?;
+    let check = |flow: ControlFlow<()>, stage: Stage| match flow {
+        ControlFlow::Continue(()) => Ok(()),
+        ControlFlow::Break(()) => Err(AtlasError::Cancelled { stage }),
+    };
+
+    // 1. Segment.
+    progress.stage_started(Stage::Segment);
+    check(progress.advance(Stage::Segment, 0, 1), Stage::Segment)?;
+    let seg = segment_charts(mesh, &options.segment)?;
+    check(progress.advance(Stage::Segment, 1, 1), Stage::Segment)?;
+    progress.stage_finished(Stage::Segment);
+
+    // 2. Parameterize and validate.
+    progress.stage_started(Stage::Parameterize);
+    check(
+        progress.advance(Stage::Parameterize, 0, seg.num_charts()),
+        Stage::Parameterize,
+    )?;
+    let validated = validate_charts(mesh, &seg, &options.validate)?;
+    let charts = &validated.segmentation.charts;
+    check(
+        progress.advance(Stage::Parameterize, charts.len(), charts.len()),
+        Stage::Parameterize,
+    )?;
+    let mut stats = PipelineStats {
+        segmented_charts: seg.num_charts(),
+        validation_splits: validated.splits,
+        validation_merges: validated.merges,
+        ..PipelineStats::default()
+    };
+    for (chart, defect) in &validated.unresolved {
+        match defect {
+            ChartDefect::AreaRatio { .. } => stats.area_ratio_unresolved += 1,
+            ChartDefect::Unparameterizable(e) => {
+                return Err(AtlasError::Unparameterizable {
+                    chart: *chart,
+                    faces: charts[*chart].len(),
+                    detail: e.to_string(),
+                })
+            }
+            // Validation never leaves a flip or an overlap (its contract); if it ever did, the
+            // measured report below shows it, so nothing is hidden.
+            ChartDefect::Flipped { .. } | ChartDefect::BoundaryOverlap { .. } => {}
+        }
+    }
+    // Local triangles of each chart in its map's vertex numbering, and 3-D areas.
+    let mut local_of = vec![u32::MAX; mesh.num_vertices()];
+    let mut chart_triangles: Vec<Vec<[u32; 3]>> = Vec::with_capacity(charts.len());
+    let mut chart_area_m2: Vec<f64> = Vec::with_capacity(charts.len());
+    for (i, faces) in charts.iter().enumerate() {
+        let Some((map, global)) = validated.maps[i].as_ref() else {
+            return Err(AtlasError::Unparameterizable {
+                chart: i,
+                faces: faces.len(),
+                detail: "no map was produced".into(),
+            });
+        };
+        match map.method_used {
+            parameterize::ParameterizeMethod::Hierarchical => stats.charts_hierarchical += 1,
+            _ => stats.charts_direct += 1,
+        }
+        for (l, v) in global.iter().enumerate() {
+            local_of[v.index()] = l as u32;
+        }
+        let mut tris = Vec::with_capacity(faces.len());
+        let mut area = 0.0;
+        for &f in faces {
+            let t = mesh.face_vertices(f).map(|v: VertexId| local_of[v.index()]);
+            debug_assert!(t.iter().all(|&l| (l as usize) < map.uv.len()));
+            tris.push(t);
+            area += mesh.face_area_m2(f);
+        }
+        for v in global {
+            local_of[v.index()] = u32::MAX;
+        }
+        chart_triangles.push(tris);
+        chart_area_m2.push(area);
+    }
+    progress.stage_finished(Stage::Parameterize);
+
+    // 3. Pack.
+    progress.stage_started(Stage::Pack);
+    let pack_input: Vec<PackChart<'_>> = (0..charts.len())
+        .map(|i| PackChart {
+            uv: validated.maps[i].as_ref().map_or(&[][..], |(m, _)| &m.uv),
+            triangles: &chart_triangles[i],
+            area_m2: chart_area_m2[i],
+        })
+        .collect();
+    let packing = pack_charts(&pack_input, &options.pack, &mut |(done, total)| {
+        progress.advance(Stage::Pack, done, total)
+    })?;
+    stats.texels_per_unit = packing.texels_per_unit;
+    let mut corner_uvs = vec![[[0.0f32; 2]; 3]; mesh.num_faces()];
+    let mut face_chart = vec![0u32; mesh.num_faces()];
+    let mut face_page = vec![0u32; mesh.num_faces()];
+    let mut chart_page = Vec::with_capacity(charts.len());
+    for (i, faces) in charts.iter().enumerate() {
+        let placed = &packing.charts[i];
+        chart_page.push(placed.page);
+        for (&f, t) in faces.iter().zip(&chart_triangles[i]) {
+            corner_uvs[f.index()] = t.map(|l| {
+                let p = placed.uv[l as usize];
+                [p[0] as f32, p[1] as f32]
+            });
+            face_chart[f.index()] = i as u32;
+            face_page[f.index()] = placed.page;
+        }
+    }
+    progress.stage_finished(Stage::Pack);
+
+    // 4. Measure.
+    progress.stage_started(Stage::Measure);
+    check(progress.advance(Stage::Measure, 0, 1), Stage::Measure)?;
+    let report = measure_atlas(&MeasureInput {
+        mesh,
+        corner_uvs: &corner_uvs,
+        face_page: &face_page,
+        num_pages: packing.num_pages,
+        width_texels: options.pack.width_texels,
+        height_texels: options.pack.height_texels,
+        padding_texels: options.pack.padding_texels,
+    });
+    check(progress.advance(Stage::Measure, 1, 1), Stage::Measure)?;
+    progress.stage_finished(Stage::Measure);
+
+    Ok(Atlas {
+        corner_uvs,
+        face_chart,
+        chart_page,
+        face_page,
+        num_pages: packing.num_pages,
+        stats,
+        report,
+    })
+}
