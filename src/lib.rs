@@ -48,3 +48,5 @@ pub mod gltf_io;
 pub mod inspect;
 pub mod mesh;
 pub mod numerics;
+pub mod preview;
+pub mod unwrap;

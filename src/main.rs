@@ -21,15 +21,19 @@ enum Command {
     /// Print meshes, primitives, triangles, welded vertices, boundary loops, genus per connected
     /// component, and every defect of a glTF asset.
     Inspect(cli::inspect::InspectArgs),
-    /// Measurements: `texatlas bench parameterize [--json] [--sizes 50000,250000,1000000]`.
-    #[command(subcommand)]
-    Bench(cli::bench::BenchCommand),
+    /// Cut, flatten and pack every triangle mesh of a glTF asset into one atlas and write the
+    /// asset back with the new UVs (plus `--report` JSON and `--preview` PNG).
+    Unwrap(cli::unwrap::UnwrapArgs),
+    /// Measurements: `texatlas bench [FILES…] [--peers]` (whole pipeline beside xatlas and
+    /// uvunwrap), `texatlas bench parameterize` (LSCM direct vs CG vs HLSCM).
+    Bench(cli::bench::BenchArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Inspect(args) => cli::inspect::run(&args),
+        Command::Unwrap(args) => cli::unwrap::run(&args),
         Command::Bench(command) => cli::bench::run(&command),
     };
     match result {

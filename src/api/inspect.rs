@@ -1,7 +1,4 @@
-//! The wire types: the only serde types of the crate. Each mirrors a document in `proto/` and is
-//! built from a domain type by an explicit `From` conversion, so the domain stays free of serde.
-//!
-//! - [`InspectJson`] ↔ `proto/inspect.schema.json` (`texatlas inspect --json`).
+//! `texatlas inspect --json` ↔ `proto/inspect.schema.json`.
 use serde::Serialize;
 
 use crate::gltf_io::{MeshSummary, PrimitiveSummary, SourceFormat};

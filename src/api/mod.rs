@@ -1,0 +1,14 @@
+//! The wire types: the only serde types of the crate. Each mirrors a document in `proto/` and is
+//! built from a domain type by an explicit conversion, so the domain stays free of serde.
+//!
+//! - [`InspectJson`] ↔ `proto/inspect.schema.json` (`texatlas inspect --json`);
+//! - [`OptionsJson`] ↔ `proto/options.schema.json` (the options of an unwrap, the same names
+//!   for CLI flags, HTTP query parameters and the multipart `options` part);
+//! - [`ReportJson`] ↔ `proto/report.schema.json` (`texatlas unwrap --report`, the job report).
+mod inspect;
+mod options;
+mod report;
+
+pub use inspect::*;
+pub use options::*;
+pub use report::*;

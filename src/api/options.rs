@@ -1,0 +1,266 @@
+//! The options of one unwrap on the wire ↔ `proto/options.schema.json`.
+//!
+//! One flat object whose names are the CLI flags (`--padding-texels` ↔ `padding_texels`), the
+//! HTTP query parameters and the multipart `options` part. Every field is optional; a missing
+//! field takes the default of the domain option it maps to ([`AtlasOptions`]). Unknown fields are
+//! refused, so a typo is an error rather than a silently ignored option.
+use serde::{Deserialize, Serialize};
+
+use crate::atlas::parameterize::ParameterizeMethod;
+use crate::atlas::{AtlasError, AtlasOptions, TexelDensity};
+use crate::gltf_io::{OutputFormat, UvTarget};
+
+/// Page size: one side for a square page, or `[width, height]`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum ResolutionJson {
+    /// A square page of this many texels per side.
+    Square(u32),
+    /// `[width, height]` in texels.
+    Rect([u32; 2]),
+}
+
+impl ResolutionJson {
+    /// `[width, height]` in texels.
+    pub fn texels(self) -> [u32; 2] {
+        match self {
+            ResolutionJson::Square(s) => [s, s],
+            ResolutionJson::Rect(r) => r,
+        }
+    }
+}
+
+/// Which solver flattens the charts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SolverJson {
+    /// Direct for charts below 500k vertices, hierarchical (HLSCM) above.
+    #[default]
+    Auto,
+    /// Sparse Cholesky.
+    Direct,
+    /// HLSCM (cascadic multigrid over a progressive mesh).
+    Hierarchical,
+}
+
+/// Where the atlas UVs go.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum UvSetJson {
+    /// `"first_free"`: `TEXCOORD_0` when a primitive has no UVs, else its first unused set.
+    Named(UvSetName),
+    /// Replace `TEXCOORD_k`.
+    Index(u32),
+}
+
+/// The one named UV-set choice.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum UvSetName {
+    /// See [`UvSetJson::Named`].
+    FirstFree,
+}
+
+/// The container of the result.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum OutputFormatJson {
+    /// Binary glTF.
+    #[default]
+    Glb,
+    /// JSON glTF with one embedded `data:` buffer.
+    Gltf,
+}
+
+/// The options of one unwrap (module doc). `None` means "the default".
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OptionsJson {
+    /// Page size in texels, default 1024 (square), at most 16384 per side.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub resolution: Option<ResolutionJson>,
+    /// Empty texels between charts and from the page edge, default 2.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub padding_texels: Option<u32>,
+    /// Fixed texel density in texels per model unit; unset fits everything on one page.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub texels_per_unit: Option<f64>,
+    /// Rotations tried per chart when packing, 1..=360, default 16.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotations: Option<u32>,
+    /// Upper bound on the number of charts after segmentation (best effort); unset: no bound.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_charts: Option<usize>,
+    /// Largest per-chart ratio between face area ratios (model / UV), default 2 (LSCM paper
+    /// §3.3). Must be ≥ 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_area_ratio: Option<f64>,
+    /// Fraction of edges kept as feature candidates, (0, 1], default 0.05.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub feature_fraction: Option<f64>,
+    /// Solver, default `auto`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solver: Option<SolverJson>,
+    /// Which `TEXCOORD_k` receives the atlas, default `"first_free"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub uv_set: Option<UvSetJson>,
+    /// Container of the result, default `glb`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output_format: Option<OutputFormatJson>,
+}
+
+/// The domain options an [`OptionsJson`] stands for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UnwrapSettings {
+    /// The pipeline's options.
+    pub atlas: AtlasOptions,
+    /// Where the UVs go.
+    pub uv_target: UvTarget,
+    /// The output container.
+    pub format: OutputFormat,
+}
+
+impl OptionsJson {
+    /// The domain options, checked: an [`AtlasError::InvalidOption`] names the first bad field.
+    pub fn to_settings(&self) -> Result<UnwrapSettings, AtlasError> {
+        let mut atlas = AtlasOptions::default();
+        if let Some(r) = self.resolution {
+            let [w, h] = r.texels();
+            atlas.pack.width_texels = w;
+            atlas.pack.height_texels = h;
+        }
+        if let Some(p) = self.padding_texels {
+            atlas.pack.padding_texels = p;
+        }
+        if let Some(d) = self.texels_per_unit {
+            atlas.pack.density = TexelDensity::TexelsPerUnit(d);
+        }
+        if let Some(r) = self.rotations {
+            atlas.pack.rotations = r;
+        }
+        atlas.segment.max_charts = self.max_charts;
+        if let Some(r) = self.max_area_ratio {
+            atlas.validate.max_area_ratio = Some(r);
+        }
+        if let Some(f) = self.feature_fraction {
+            atlas.segment.lscm.feature_fraction = f;
+        }
+        atlas.validate.parameterize.method = match self.solver.unwrap_or_default() {
+            SolverJson::Auto => ParameterizeMethod::Auto,
+            SolverJson::Direct => ParameterizeMethod::Direct,
+            SolverJson::Hierarchical => ParameterizeMethod::Hierarchical,
+        };
+        atlas.check()?;
+        let uv_target = match self.uv_set {
+            None | Some(UvSetJson::Named(UvSetName::FirstFree)) => UvTarget::FirstFree,
+            Some(UvSetJson::Index(k)) => UvTarget::Replace(k),
+        };
+        let format = match self.output_format.unwrap_or_default() {
+            OutputFormatJson::Glb => OutputFormat::Glb,
+            OutputFormatJson::Gltf => OutputFormat::Gltf,
+        };
+        Ok(UnwrapSettings {
+            atlas,
+            uv_target,
+            format,
+        })
+    }
+
+    /// Every option with its effective value (defaults filled in), for the report.
+    pub fn effective(settings: &UnwrapSettings) -> OptionsJson {
+        let a = &settings.atlas;
+        OptionsJson {
+            resolution: Some(if a.pack.width_texels == a.pack.height_texels {
+                ResolutionJson::Square(a.pack.width_texels)
+            } else {
+                ResolutionJson::Rect([a.pack.width_texels, a.pack.height_texels])
+            }),
+            padding_texels: Some(a.pack.padding_texels),
+            texels_per_unit: match a.pack.density {
+                TexelDensity::FitToPage => None,
+                TexelDensity::TexelsPerUnit(d) => Some(d),
+            },
+            rotations: Some(a.pack.rotations),
+            max_charts: a.segment.max_charts,
+            max_area_ratio: a.validate.max_area_ratio,
+            feature_fraction: Some(a.segment.lscm.feature_fraction),
+            solver: Some(match a.validate.parameterize.method {
+                ParameterizeMethod::Direct => SolverJson::Direct,
+                ParameterizeMethod::Hierarchical => SolverJson::Hierarchical,
+                _ => SolverJson::Auto,
+            }),
+            uv_set: Some(match settings.uv_target {
+                UvTarget::FirstFree => UvSetJson::Named(UvSetName::FirstFree),
+                UvTarget::Replace(k) => UvSetJson::Index(k),
+            }),
+            output_format: Some(match settings.format {
+                OutputFormat::Glb => OutputFormatJson::Glb,
+                OutputFormat::Gltf => OutputFormatJson::Gltf,
+            }),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn empty_options_are_the_defaults() {
+        let o: OptionsJson = serde_json::from_str("{}").unwrap();
+        let s = o.to_settings().unwrap();
+        assert_eq!(s.atlas, AtlasOptions::default());
+        assert_eq!(s.uv_target, UvTarget::FirstFree);
+        assert_eq!(s.format, OutputFormat::Glb);
+    }
+
+    #[test]
+    fn every_field_maps_and_round_trips() {
+        let text = r#"{"resolution":[2048,512],"padding_texels":4,"texels_per_unit":300.5,
+            "rotations":4,"max_charts":12,"max_area_ratio":3.0,"feature_fraction":0.1,
+            "solver":"hierarchical","uv_set":2,"output_format":"gltf"}"#;
+        let o: OptionsJson = serde_json::from_str(text).unwrap();
+        let s = o.to_settings().unwrap();
+        assert_eq!((s.atlas.pack.width_texels, s.atlas.pack.height_texels), (2048, 512));
+        assert_eq!(s.atlas.pack.padding_texels, 4);
+        assert_eq!(s.atlas.pack.density, TexelDensity::TexelsPerUnit(300.5));
+        assert_eq!(s.atlas.pack.rotations, 4);
+        assert_eq!(s.atlas.segment.max_charts, Some(12));
+        assert_eq!(s.atlas.validate.max_area_ratio, Some(3.0));
+        assert_eq!(s.atlas.segment.lscm.feature_fraction, 0.1);
+        assert_eq!(
+            s.atlas.validate.parameterize.method,
+            ParameterizeMethod::Hierarchical
+        );
+        assert_eq!(s.uv_target, UvTarget::Replace(2));
+        assert_eq!(s.format, OutputFormat::Gltf);
+        assert_eq!(OptionsJson::effective(&s), o);
+    }
+
+    #[test]
+    fn bad_values_name_the_option() {
+        for (text, option) in [
+            (r#"{"padding_texels":600}"#, "padding_texels"),
+            (r#"{"resolution":0}"#, "width_texels"),
+            (r#"{"rotations":0}"#, "rotations"),
+            (r#"{"texels_per_unit":-1}"#, "texels_per_unit"),
+            (r#"{"max_area_ratio":0.5}"#, "max_area_ratio"),
+            (r#"{"feature_fraction":2}"#, "lscm.feature_fraction"),
+            (r#"{"max_charts":0}"#, "max_charts"),
+        ] {
+            let o: OptionsJson = serde_json::from_str(text).unwrap();
+            match o.to_settings() {
+                Err(AtlasError::InvalidOption { option: got, .. }) => {
+                    assert_eq!(got, option, "{text}")
+                }
+                other => panic!("{text}: expected InvalidOption({option}), got {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn unknown_fields_are_refused() {
+        let e = serde_json::from_str::<OptionsJson>(r#"{"padding":2}"#).unwrap_err();
+        assert!(e.to_string().contains("unknown field `padding`"), "{e}");
+    }
+}

@@ -1,0 +1,375 @@
+//! `texatlas bench [FILES…] [--peers]`: the whole pipeline per file, beside xatlas and uvunwrap.
+//!
+//! Purpose: the measurement behind issue 5's targets (time, memory and quality next to the
+//! peers, on the same machine, in the same run).
+//!
+//! How, per file:
+//! - **texatlas** runs in a child process of the same binary (hidden `bench pipeline-child`), so
+//!   its peak memory (`VmHWM`) is its own. Timed: mesh build, the four stages, encode (not the
+//!   file read or write). Quality: our report (`quality.*`).
+//! - with `--peers`, **xatlas** and **uvunwrap** run through `$EVAL_DIR/peer_xatlas.py` and
+//!   `peer_uvunwrap.py` (`pip install xatlas uvunwrap numpy`), each in a Python wrapper that
+//!   reads the child's peak RSS (`getrusage(RUSAGE_CHILDREN)`); their time is the peer's own
+//!   timing of the library calls only (`xatlas_s`, `uvunwrap_s`: no file IO, which favours the
+//!   peers). Then `atlas_eval.py` measures **all three outputs** (ours included), so the quality
+//!   columns compare like with like; our own report's figures are kept beside them.
+//!
+//! This module is NOT core: it uses wall-clock time, processes and the filesystem.
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Duration;
+
+use anyhow::{bail, Context as _};
+use serde::{Deserialize, Serialize};
+
+/// One row of the table: one tool on one file.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct PipelineRow {
+    /// File name.
+    pub file: String,
+    /// `texatlas`, `xatlas` or `uvunwrap`.
+    pub tool: String,
+    /// Triangles of the input.
+    pub triangles: usize,
+    /// Seconds per stage (texatlas only): build, segment, parameterize, pack, measure, encode.
+    pub stages_s: Option<[f64; 6]>,
+    /// Seconds of the timed part (see the module doc).
+    pub total_s: f64,
+    /// Peak resident memory of the process that did the work, MiB.
+    pub peak_mib: f64,
+    /// Quality of the output as the evaluator measured it (`None` without `--peers`/`--eval`).
+    pub eval: Option<Quality>,
+    /// Quality from texatlas's own report (texatlas only).
+    pub report: Option<Quality>,
+    /// Why the tool failed on this file, if it did.
+    pub error: Option<String>,
+}
+
+/// The quality columns.
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq)]
+pub struct Quality {
+    /// Charts.
+    pub charts: u64,
+    /// Sander L2 stretch (global normalisation).
+    pub l2: f64,
+    /// Symmetric L∞ stretch.
+    pub linf: f64,
+    /// Σ UV area / page area.
+    pub packing: f64,
+    /// Flipped triangles.
+    pub flipped: u64,
+    /// Overlapping triangle pairs.
+    pub overlaps: u64,
+}
+
+impl Quality {
+    /// The quality keys of an `atlas_eval.py --json` object.
+    pub fn from_eval(v: &serde_json::Value) -> Option<Quality> {
+        let f = |p: &str| v.pointer(p).and_then(serde_json::Value::as_f64);
+        let u = |p: &str| v.pointer(p).and_then(serde_json::Value::as_u64);
+        Some(Quality {
+            charts: u("/charts")?,
+            l2: f("/stretch/l2")?,
+            linf: f("/stretch/linf").unwrap_or(f64::INFINITY),
+            packing: f("/packing_efficiency")?,
+            flipped: u("/flipped")?,
+            overlaps: u("/overlap/pairs").unwrap_or(0),
+        })
+    }
+
+    /// The quality keys of a texatlas report (`proto/report.schema.json`).
+    pub fn from_report(v: &serde_json::Value) -> Option<Quality> {
+        let f = |p: &str| v.pointer(p).and_then(serde_json::Value::as_f64);
+        let u = |p: &str| v.pointer(p).and_then(serde_json::Value::as_u64);
+        Some(Quality {
+            charts: u("/quality/charts")?,
+            l2: f("/quality/stretch/l2")?,
+            linf: f("/quality/stretch/linf").unwrap_or(f64::INFINITY),
+            packing: f("/quality/packing_efficiency")?,
+            flipped: u("/quality/flipped")?,
+            overlaps: u("/quality/overlap/exact_pairs")?,
+        })
+    }
+}
+
+/// What to run.
+#[derive(Debug, Clone)]
+pub struct BenchConfig {
+    /// The `texatlas` executable (the child runs `bench pipeline-child`).
+    pub exe: PathBuf,
+    /// Directory of `atlas_eval.py`, `peer_xatlas.py`, `peer_uvunwrap.py`.
+    pub eval_dir: PathBuf,
+    /// Run the peers (implies `eval`).
+    pub peers: bool,
+    /// Measure every output with the evaluator.
+    pub eval: bool,
+    /// Page side, texels.
+    pub resolution: u32,
+    /// Padding, texels.
+    pub padding: u32,
+    /// A peer still running after this long is stopped and reported as such.
+    pub peer_timeout: Duration,
+    /// Where outputs go.
+    pub work_dir: PathBuf,
+}
+
+/// Every corpus `.glb` in `dir`, sorted.
+pub fn corpus_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("reading the corpus directory {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "glb"))
+        .collect();
+    files.sort();
+    Ok(files)
+}
+
+/// Runs every tool on every file; `on_row` sees each row as it is measured.
+pub fn run_bench(
+    files: &[PathBuf],
+    config: &BenchConfig,
+    mut on_row: impl FnMut(&PipelineRow),
+) -> anyhow::Result<Vec<PipelineRow>> {
+    std::fs::create_dir_all(&config.work_dir)
+        .with_context(|| format!("creating {}", config.work_dir.display()))?;
+    let mut rows = Vec::new();
+    for file in files {
+        let name = file
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let stem = file
+            .file_stem()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let ours_out = config.work_dir.join(format!("{stem}.texatlas.glb"));
+        let mut row = run_ours(file, &ours_out, config);
+        row.file = name.clone();
+        if (config.eval || config.peers) && row.error.is_none() {
+            row.eval = run_eval(&ours_out, config).ok();
+        }
+        let triangles = row.triangles;
+        on_row(&row);
+        rows.push(row);
+        if config.peers {
+            for tool in ["xatlas", "uvunwrap"] {
+                let out = config.work_dir.join(format!("{stem}.{tool}.glb"));
+                let mut row = run_peer(tool, file, &out, config);
+                row.file = name.clone();
+                if row.triangles == 0 {
+                    row.triangles = triangles;
+                }
+                if row.error.is_none() {
+                    match run_eval(&out, config) {
+                        Ok(q) => row.eval = Some(q),
+                        Err(e) => row.error = Some(format!("evaluator: {e:#}")),
+                    }
+                }
+                on_row(&row);
+                rows.push(row);
+            }
+        }
+    }
+    Ok(rows)
+}
+
+fn run_ours(file: &Path, out: &Path, config: &BenchConfig) -> PipelineRow {
+    let result = Command::new(&config.exe)
+        .args(["bench", "pipeline-child", "--input"])
+        .arg(file)
+        .arg("--output")
+        .arg(out)
+        .args(["--resolution", &config.resolution.to_string()])
+        .args(["--padding", &config.padding.to_string()])
+        .output();
+    let failed = |e: String| PipelineRow {
+        tool: "texatlas".into(),
+        error: Some(e),
+        ..PipelineRow::default()
+    };
+    match result {
+        Err(e) => failed(format!("cannot run {}: {e}", config.exe.display())),
+        Ok(o) if !o.status.success() => failed(
+            String::from_utf8_lossy(&o.stderr)
+                .trim()
+                .lines()
+                .last()
+                .unwrap_or("failed")
+                .to_string(),
+        ),
+        Ok(o) => serde_json::from_slice(&o.stdout)
+            .unwrap_or_else(|e| failed(format!("child output is not a row: {e}"))),
+    }
+}
+
+/// Wraps a command so that its peak RSS (KiB) is written to `rss_file`.
+const RSS_WRAPPER: &str = "import json,resource,subprocess,sys\n\
+r=subprocess.run(sys.argv[2:],stdout=subprocess.PIPE,stderr=subprocess.PIPE,timeout=float(sys.argv[1]))\n\
+sys.stdout.write(r.stdout.decode());sys.stderr.write(r.stderr.decode())\n\
+sys.stderr.write('\\nRSS_KIB=%d\\n'%resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n\
+sys.exit(r.returncode)";
+
+fn run_peer(tool: &str, file: &Path, out: &Path, config: &BenchConfig) -> PipelineRow {
+    let script = config.eval_dir.join(format!("peer_{tool}.py"));
+    let mut row = PipelineRow {
+        tool: tool.into(),
+        ..PipelineRow::default()
+    };
+    let result = Command::new("python3")
+        .args(["-c", RSS_WRAPPER])
+        .arg(config.peer_timeout.as_secs_f64().to_string())
+        .arg("python3")
+        .arg(&script)
+        .arg(file)
+        .arg(out)
+        .args(["--resolution", &config.resolution.to_string()])
+        .args(["--padding", &config.padding.to_string()])
+        .arg("--json")
+        .output();
+    let o = match result {
+        Ok(o) => o,
+        Err(e) => {
+            row.error = Some(format!("cannot run python3: {e}"));
+            return row;
+        }
+    };
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    if let Some(kib) = stderr
+        .lines()
+        .rev()
+        .find_map(|l| l.strip_prefix("RSS_KIB="))
+        .and_then(|k| k.trim().parse::<f64>().ok())
+    {
+        row.peak_mib = kib / 1024.0;
+    }
+    if !o.status.success() {
+        let why = if stderr.contains("TimeoutExpired") {
+            format!("stopped after {:.0} s", config.peer_timeout.as_secs_f64())
+        } else {
+            stderr
+                .lines()
+                .rfind(|l| !l.trim().is_empty() && !l.starts_with("RSS_KIB="))
+                .unwrap_or("failed")
+                .to_string()
+        };
+        row.error = Some(why);
+        return row;
+    }
+    let v: serde_json::Value = match serde_json::from_slice(&o.stdout) {
+        Ok(v) => v,
+        Err(e) => {
+            row.error = Some(format!("peer output is not JSON: {e}"));
+            return row;
+        }
+    };
+    row.triangles = v.get("triangles").and_then(|t| t.as_u64()).unwrap_or(0) as usize;
+    row.total_s = v
+        .get(format!("{tool}_s"))
+        .and_then(|t| t.as_f64())
+        .unwrap_or(f64::NAN);
+    row
+}
+
+fn run_eval(out: &Path, config: &BenchConfig) -> anyhow::Result<Quality> {
+    let o = Command::new("python3")
+        .arg(config.eval_dir.join("atlas_eval.py"))
+        .arg(out)
+        .args(["--resolution", &config.resolution.to_string()])
+        .args(["--padding", &config.padding.to_string()])
+        .arg("--json")
+        .output()
+        .context("running python3 atlas_eval.py")?;
+    if !o.status.success() {
+        bail!("{}", String::from_utf8_lossy(&o.stderr).trim());
+    }
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout)?;
+    Quality::from_eval(&v).context("the evaluator's JSON lacks a quality key")
+}
+
+/// The table: one line per tool and file, then the time ratios per file.
+pub fn format_table(rows: &[PipelineRow]) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| file | tool | triangles | build+segment+param+pack+measure+encode s | total s | peak MiB | charts | L2 | L∞ | packing | flips | overlaps | measured by |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for r in rows {
+        let stages = r.stages_s.map_or_else(
+            || "–".to_string(),
+            |st| {
+                st.iter()
+                    .map(|x| format!("{x:.2}"))
+                    .collect::<Vec<_>>()
+                    .join("+")
+            },
+        );
+        if let Some(e) = &r.error {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | – | – | {:.0} | failed: {e} |||||| |",
+                r.file, r.tool, r.triangles, r.peak_mib
+            );
+            continue;
+        }
+        let mut quality = vec![];
+        if let Some(q) = r.eval {
+            quality.push((q, "atlas_eval"));
+        }
+        if let Some(q) = r.report {
+            quality.push((q, "own report"));
+        }
+        for (i, (q, by)) in quality.iter().enumerate() {
+            let (stages, total, peak) = if i == 0 {
+                (
+                    stages.clone(),
+                    format!("{:.3}", r.total_s),
+                    format!("{:.0}", r.peak_mib),
+                )
+            } else {
+                ("″".into(), "″".into(), "″".into())
+            };
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {stages} | {total} | {peak} | {} | {:.4} | {:.3} | {:.3} | {} | {} | {by} |",
+                r.file, r.tool, r.triangles, q.charts, q.l2, q.linf, q.packing, q.flipped, q.overlaps
+            );
+        }
+    }
+    // Ratios, per file, measured in this run.
+    let mut files: Vec<&str> = rows.iter().map(|r| r.file.as_str()).collect();
+    files.dedup();
+    let mut ratio_lines = Vec::new();
+    for f in files {
+        let get = |tool: &str| {
+            rows.iter()
+                .find(|r| r.file == f && r.tool == tool && r.error.is_none())
+        };
+        let Some(ours) = get("texatlas") else { continue };
+        let mut parts = Vec::new();
+        for peer in ["xatlas", "uvunwrap"] {
+            if let Some(p) = get(peer) {
+                if ours.total_s > 0.0 && p.total_s.is_finite() {
+                    parts.push(format!(
+                        "{peer} {:.1}× our time, {:.2}× our memory",
+                        p.total_s / ours.total_s,
+                        p.peak_mib / ours.peak_mib.max(1e-9)
+                    ));
+                }
+            } else if rows.iter().any(|r| r.file == f && r.tool == peer) {
+                parts.push(format!("{peer} failed or was stopped"));
+            }
+        }
+        if !parts.is_empty() {
+            ratio_lines.push(format!("- {f}: {}", parts.join("; ")));
+        }
+    }
+    if !ratio_lines.is_empty() {
+        let _ = writeln!(s, "\nRatios (same run):");
+        for l in ratio_lines {
+            let _ = writeln!(s, "{l}");
+        }
+    }
+    s
+}

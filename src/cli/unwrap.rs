@@ -1,0 +1,233 @@
+//! `texatlas unwrap IN -o OUT [--report R.json] [--preview P.png] [options]`.
+//!
+//! Runs the same pipeline as the service ([`texatlas::unwrap::unwrap_asset`]) on one file, with
+//! a progress bar on stderr (stage names; off with `--quiet` or when stderr is not a terminal).
+//! The option flags are the wire options of `proto/options.schema.json` with `-` for `_`.
+use std::io::IsTerminal as _;
+use std::ops::ControlFlow;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{bail, Context as _};
+use indicatif::{ProgressBar, ProgressStyle};
+use texatlas::api::{
+    OptionsJson, OutputFormatJson, ResolutionJson, SolverJson, UvSetJson, UvSetName,
+};
+use texatlas::atlas::{Progress, Stage};
+use texatlas::preview::{preview_size_px, render_preview};
+use texatlas::unwrap::unwrap_asset;
+
+use super::load::load_asset;
+
+#[derive(Debug, clap::Args)]
+pub struct UnwrapArgs {
+    /// The glTF asset: `.glb`, or `.gltf` with `data:` URIs or with its buffers and images in its
+    /// own directory.
+    pub input: PathBuf,
+    /// Where to write the asset with the atlas UVs (`.glb`, or `.gltf` for JSON with an embedded
+    /// buffer, unless --output-format says otherwise).
+    #[arg(short = 'o', long)]
+    pub output: PathBuf,
+    /// Also write the JSON report (proto/report.schema.json) here.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Also draw the UV layout as a PNG here (pages after the first get `-1`, `-2`… suffixes).
+    #[arg(long)]
+    pub preview: Option<PathBuf>,
+    /// No progress bar and no summary line.
+    #[arg(short, long)]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub options: OptionFlags,
+}
+
+/// The wire options as flags (names and meanings: proto/options.schema.json).
+#[derive(Debug, Default, clap::Args)]
+pub struct OptionFlags {
+    /// Page size in texels: `1024` (square) or `2048x1024` (width x height). Default 1024.
+    #[arg(long, value_parser = parse_resolution)]
+    pub resolution: Option<ResolutionJson>,
+    /// Empty texels between charts and from the page edge. Default 2.
+    #[arg(long)]
+    pub padding_texels: Option<u32>,
+    /// Fixed texel density in texels per model unit (more pages open when needed). Default:
+    /// the largest density that fits everything on one page.
+    #[arg(long)]
+    pub texels_per_unit: Option<f64>,
+    /// Rotations tried per chart when packing (1..=360). Default 16.
+    #[arg(long)]
+    pub rotations: Option<u32>,
+    /// Upper bound on the number of charts after segmentation (best effort). Default: none.
+    #[arg(long)]
+    pub max_charts: Option<usize>,
+    /// Largest per-chart spread of face area ratios before a chart is split (>= 1). Default 2.
+    #[arg(long)]
+    pub max_area_ratio: Option<f64>,
+    /// Fraction of edges kept as feature candidates, (0, 1]. Default 0.05.
+    #[arg(long)]
+    pub feature_fraction: Option<f64>,
+    /// Solver: auto, direct or hierarchical. Default auto.
+    #[arg(long, value_parser = parse_solver)]
+    pub solver: Option<SolverJson>,
+    /// Which TEXCOORD_k receives the atlas: `first_free` or a set number k to replace.
+    /// Default first_free.
+    #[arg(long, value_parser = parse_uv_set)]
+    pub uv_set: Option<UvSetJson>,
+    /// Output container: glb or gltf. Default: from the output file's extension.
+    #[arg(long, value_parser = parse_format)]
+    pub output_format: Option<OutputFormatJson>,
+}
+
+impl OptionFlags {
+    /// The wire options these flags stand for.
+    pub fn to_json(&self) -> OptionsJson {
+        OptionsJson {
+            resolution: self.resolution,
+            padding_texels: self.padding_texels,
+            texels_per_unit: self.texels_per_unit,
+            rotations: self.rotations,
+            max_charts: self.max_charts,
+            max_area_ratio: self.max_area_ratio,
+            feature_fraction: self.feature_fraction,
+            solver: self.solver,
+            uv_set: self.uv_set,
+            output_format: self.output_format,
+        }
+    }
+}
+
+fn parse_resolution(s: &str) -> Result<ResolutionJson, String> {
+    let num = |t: &str| {
+        t.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("`{s}` is not a resolution; use e.g. 1024 or 2048x1024"))
+    };
+    match s.split_once(['x', 'X']) {
+        Some((w, h)) => Ok(ResolutionJson::Rect([num(w)?, num(h)?])),
+        None => Ok(ResolutionJson::Square(num(s)?)),
+    }
+}
+
+fn parse_solver(s: &str) -> Result<SolverJson, String> {
+    match s {
+        "auto" => Ok(SolverJson::Auto),
+        "direct" => Ok(SolverJson::Direct),
+        "hierarchical" => Ok(SolverJson::Hierarchical),
+        _ => Err(format!("`{s}` is not a solver; use auto, direct or hierarchical")),
+    }
+}
+
+fn parse_uv_set(s: &str) -> Result<UvSetJson, String> {
+    if s == "first_free" {
+        return Ok(UvSetJson::Named(UvSetName::FirstFree));
+    }
+    s.parse::<u32>()
+        .map(UvSetJson::Index)
+        .map_err(|_| format!("`{s}` is not a UV set; use first_free or a set number like 1"))
+}
+
+fn parse_format(s: &str) -> Result<OutputFormatJson, String> {
+    match s {
+        "glb" => Ok(OutputFormatJson::Glb),
+        "gltf" => Ok(OutputFormatJson::Gltf),
+        _ => Err(format!("`{s}` is not an output format; use glb or gltf")),
+    }
+}
+
+/// A progress bar with the stage name as prefix.
+struct Bar(ProgressBar);
+
+impl Progress for Bar {
+    fn stage_started(&mut self, stage: Stage) {
+        self.0.set_prefix(stage.name());
+        self.0.set_length(1);
+        self.0.set_position(0);
+    }
+    fn advance(&mut self, _stage: Stage, done: usize, total: usize) -> ControlFlow<()> {
+        self.0.set_length(total.max(1) as u64);
+        self.0.set_position(done as u64);
+        ControlFlow::Continue(())
+    }
+}
+
+pub fn run(args: &UnwrapArgs) -> anyhow::Result<ExitCode> {
+    let mut options = args.options.to_json();
+    if options.output_format.is_none() {
+        let is_gltf = args
+            .output
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
+        options.output_format = Some(if is_gltf {
+            OutputFormatJson::Gltf
+        } else {
+            OutputFormatJson::Glb
+        });
+    }
+    let settings = options.to_settings().context("checking the options")?;
+    let loaded = load_asset(&args.input)?;
+    let bar = if args.quiet || !std::io::stderr().is_terminal() {
+        ProgressBar::hidden()
+    } else {
+        let bar = ProgressBar::new(1);
+        bar.set_style(
+            ProgressStyle::with_template("{prefix:>12.bold} [{bar:32}] {pos}/{len} {elapsed}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        bar
+    };
+    let mut progress = Bar(bar.clone());
+    let result = unwrap_asset(&loaded.asset, &settings, &mut progress);
+    bar.finish_and_clear();
+    let unwrapped =
+        result.with_context(|| format!("unwrapping {}", args.input.display()))?;
+    write(&args.output, &unwrapped.encoded.bytes)?;
+    if let Some(path) = &args.report {
+        let text = serde_json::to_string_pretty(&unwrapped.report)?;
+        write(path, text.as_bytes())?;
+    }
+    if let Some(path) = &args.preview {
+        let pack = &settings.atlas.pack;
+        let (w, h) = preview_size_px(pack.width_texels, pack.height_texels);
+        for page in 0..unwrapped.atlas.num_pages {
+            let png = render_preview(&unwrapped.atlas, page, w, h);
+            write(&page_path(path, page), &png)?;
+        }
+    }
+    if !args.quiet {
+        let r = &unwrapped.report;
+        eprintln!(
+            "{}: {} triangles, {} charts on {} page(s), {:.2} s",
+            args.output.display(),
+            r.input.triangles,
+            r.pipeline.charts,
+            r.pages.len(),
+            r.timings_s.total,
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `preview.png` for page 0, `preview-1.png` for page 1, …
+fn page_path(path: &Path, page: u32) -> PathBuf {
+    if page == 0 {
+        return path.to_path_buf();
+    }
+    let stem = path.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default();
+    let name = match path.extension() {
+        Some(ext) => format!("{stem}-{page}.{}", ext.to_string_lossy()),
+        None => format!("{stem}-{page}"),
+    };
+    path.with_file_name(name)
+}
+
+/// Writes atomically enough for a CLI: a temp file beside the target, then a rename.
+fn write(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    if path.as_os_str().is_empty() {
+        bail!("an output path is empty");
+    }
+    let tmp = path.with_extension("texatlas-tmp");
+    std::fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
