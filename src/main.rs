@@ -27,6 +27,8 @@ enum Command {
     /// Measurements: `texatlas bench [FILES…] [--peers]` (whole pipeline beside xatlas and
     /// uvunwrap), `texatlas bench parameterize` (LSCM direct vs CG vs HLSCM).
     Bench(cli::bench::BenchArgs),
+    /// The HTTP service: upload assets, poll jobs, download results (see README, "Service").
+    Serve(cli::serve::ServeArgs),
 }
 
 fn main() -> ExitCode {
@@ -35,6 +37,7 @@ fn main() -> ExitCode {
         Command::Inspect(args) => cli::inspect::run(&args),
         Command::Unwrap(args) => cli::unwrap::run(&args),
         Command::Bench(command) => cli::bench::run(&command),
+        Command::Serve(args) => cli::serve::run(&args),
     };
     match result {
         Ok(code) => code,

@@ -131,7 +131,10 @@ impl ReportJson {
         options: &OptionsJson,
         timings: &StepTimings,
     ) -> Self {
-        let resolution = options.resolution.map(|r| r.texels()).unwrap_or([1024, 1024]);
+        let resolution = options
+            .resolution
+            .map(|r| r.texels())
+            .unwrap_or([1024, 1024]);
         let mut pages: Vec<PageJson> = (0..atlas.num_pages)
             .map(|page| PageJson {
                 page,

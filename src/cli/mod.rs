@@ -1,4 +1,5 @@
 pub mod bench;
 pub mod inspect;
 pub mod load;
+pub mod serve;
 pub mod unwrap;

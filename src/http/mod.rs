@@ -1,0 +1,207 @@
+//! The HTTP API: the only module that knows axum.
+//!
+//! # Purpose
+//! [`router`] builds the whole API (proto/openapi.json) over a [`JobService`]; tests call it
+//! with a real listener, `service.rs` serves it.
+//!
+//! # Invariants
+//! - Every error is an [`ApiError`] → `application/problem+json` with a stable `code`.
+//! - Handlers never log. The [`log_requests`] middleware gives every request an id (the
+//!   client's `x-request-id` when it is sane, else a new UUID), runs it in a `request` span
+//!   (`request_id`, `method`, `route`, and `job_id` once a handler knows it), logs one line per
+//!   request, records the latency metric and echoes `x-request-id`.
+//! - Memory per request is bounded: uploads stream to spool files (`upload.rs`), results are
+//!   read whole from the blob store (bounded by what an upload may produce).
+//! - No SQL here (`tests/architecture.rs`): the store is reached through `jobs` only.
+mod auth;
+mod error;
+mod handlers;
+mod upload;
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use axum::extract::{DefaultBodyLimit, MatchedPath, Request, State};
+use axum::http::{HeaderName, HeaderValue, Method};
+use axum::middleware::{self, Next};
+use axum::response::Response;
+use axum::routing::get;
+use axum::Router;
+use tokio::sync::watch;
+use tower_http::cors::{AllowOrigin, CorsLayer};
+use tracing::Instrument as _;
+
+pub use auth::Owner;
+pub use error::ApiError;
+pub use handlers::OPENAPI_JSON;
+
+use crate::jobs::JobService;
+
+/// Settings of the HTTP layer.
+#[derive(Debug, Clone)]
+pub struct HttpConfig {
+    /// Accepted bearer keys; empty: no authentication (fine on localhost).
+    pub api_keys: Vec<String>,
+    /// Largest upload over all parts, bytes. Default 256 MiB.
+    pub max_upload_bytes: u64,
+    /// Origins allowed by CORS (`*` for any); empty: no CORS headers.
+    pub cors_origins: Vec<String>,
+}
+
+impl Default for HttpConfig {
+    fn default() -> Self {
+        HttpConfig {
+            api_keys: Vec::new(),
+            max_upload_bytes: 256 << 20,
+            cors_origins: Vec::new(),
+        }
+    }
+}
+
+/// What every handler sees.
+#[derive(Clone)]
+pub struct AppState {
+    pub(crate) jobs: Arc<JobService>,
+    pub(crate) config: Arc<HttpConfig>,
+    pub(crate) keys: Arc<auth::Keys>,
+    /// `true` once shutdown began: event streams end, submissions get 503.
+    pub(crate) shutdown: watch::Receiver<bool>,
+}
+
+impl AppState {
+    fn is_shutting_down(&self) -> bool {
+        *self.shutdown.borrow()
+    }
+}
+
+/// The API over `jobs`. `shutdown` turning `true` ends event streams and refuses new jobs.
+pub fn router(
+    jobs: Arc<JobService>,
+    config: HttpConfig,
+    shutdown: watch::Receiver<bool>,
+) -> Router {
+    let state = AppState {
+        keys: Arc::new(auth::Keys::new(&config.api_keys)),
+        config: Arc::new(config),
+        jobs,
+        shutdown,
+    };
+    let v1 = Router::new()
+        .route("/v1/jobs", get(handlers::list_jobs).post(handlers::submit))
+        .route(
+            "/v1/jobs/{id}",
+            get(handlers::get_job).delete(handlers::delete_job),
+        )
+        .route("/v1/jobs/{id}/events", get(handlers::job_events))
+        .route("/v1/jobs/{id}/result", get(handlers::get_result))
+        .route("/v1/jobs/{id}/report", get(handlers::get_report))
+        .route("/v1/jobs/{id}/preview.png", get(handlers::get_preview))
+        .route_layer(middleware::from_fn_with_state(
+            state.clone(),
+            auth::require_key,
+        ));
+    let mut app = Router::new()
+        .merge(v1)
+        .route("/healthz", get(handlers::healthz))
+        .route("/readyz", get(handlers::readyz))
+        .route("/metrics", get(handlers::metrics))
+        .route("/openapi.json", get(handlers::openapi))
+        .fallback(handlers::not_found)
+        .method_not_allowed_fallback(handlers::method_not_allowed)
+        // Uploads are bounded by our own streaming limit, not by a buffered-body limit.
+        .layer(DefaultBodyLimit::disable())
+        .layer(middleware::from_fn_with_state(state.clone(), log_requests))
+        .with_state(state.clone());
+    if let Some(cors) = cors_layer(&state.config.cors_origins) {
+        app = app.layer(cors);
+    }
+    app
+}
+
+fn cors_layer(origins: &[String]) -> Option<CorsLayer> {
+    if origins.is_empty() {
+        return None;
+    }
+    let allow = if origins.iter().any(|o| o == "*") {
+        AllowOrigin::any()
+    } else {
+        AllowOrigin::list(
+            origins
+                .iter()
+                .filter_map(|o| HeaderValue::from_str(o.trim()).ok()),
+        )
+    };
+    Some(
+        CorsLayer::new()
+            .allow_origin(allow)
+            .allow_methods([Method::GET, Method::POST, Method::DELETE])
+            .allow_headers([
+                axum::http::header::AUTHORIZATION,
+                axum::http::header::CONTENT_TYPE,
+                HeaderName::from_static("idempotency-key"),
+            ])
+            .expose_headers([
+                axum::http::header::LOCATION,
+                axum::http::header::RETRY_AFTER,
+                HeaderName::from_static("x-request-id"),
+            ]),
+    )
+}
+
+/// The request id: the client's when it is 1..=64 of `[A-Za-z0-9._-]`, else a new UUIDv7.
+fn request_id(req: &Request) -> String {
+    req.headers()
+        .get("x-request-id")
+        .and_then(|v| v.to_str().ok())
+        .filter(|s| {
+            !s.is_empty()
+                && s.len() <= 64
+                && s.bytes()
+                    .all(|b| b.is_ascii_alphanumeric() || matches!(b, b'.' | b'_' | b'-'))
+        })
+        .map(str::to_string)
+        .unwrap_or_else(|| uuid::Uuid::now_v7().to_string())
+}
+
+/// Middleware: request id, span, one log line, latency metric (module doc).
+async fn log_requests(State(state): State<AppState>, req: Request, next: Next) -> Response {
+    let started = Instant::now();
+    let id = request_id(&req);
+    let method = req.method().clone();
+    let route = req
+        .extensions()
+        .get::<MatchedPath>()
+        .map(|p| p.as_str().to_string())
+        .unwrap_or_else(|| "unmatched".to_string());
+    let span = tracing::info_span!(
+        "request",
+        request_id = %id,
+        method = %method,
+        route = %route,
+        job_id = tracing::field::Empty,
+    );
+    let mut response = error::REQUEST_ID
+        .scope(id.clone(), next.run(req).instrument(span.clone()))
+        .await;
+    let status = response.status();
+    let seconds = started.elapsed().as_secs_f64();
+    state
+        .jobs
+        .metrics()
+        .observe_http(method.as_str(), &route, status.as_u16(), seconds);
+    if let Ok(v) = HeaderValue::from_str(&id) {
+        response.headers_mut().insert("x-request-id", v);
+    }
+    let _entered = span.enter();
+    let ms = seconds * 1000.0;
+    match response.extensions().get::<error::InternalCause>() {
+        Some(cause) => {
+            tracing::error!(status = status.as_u16(), ms, cause = %cause.0, "request failed")
+        }
+        None if status.is_server_error() => {
+            tracing::warn!(status = status.as_u16(), ms, "request")
+        }
+        None => tracing::info!(status = status.as_u16(), ms, "request"),
+    }
+    response
+}
