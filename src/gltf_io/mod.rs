@@ -46,7 +46,10 @@ pub use decode::{
     decode, required_resources, Asset, AssetSummary, DecodeLimits, MeshSummary, PrimitiveMode,
     PrimitiveSummary, SourceFormat, TrianglePrimitive,
 };
-pub use encode::{encode, EncodeOptions, EncodedAsset, OldVertexData, OutputFormat, UvTarget};
+pub use encode::{
+    encode, encode_pages, EncodeOptions, EncodedAsset, EncodedPart, OldVertexData, OutputFormat,
+    UvTarget,
+};
 pub use error::{ErrorCode, GltfError};
 pub use uri::{relative_path_of, Resources};
 
