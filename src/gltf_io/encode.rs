@@ -1,34 +1,63 @@
-//! `encode`: decoded [`Asset`] + per-corner UVs → the same asset with a new `TEXCOORD_k`.
+//! `encode` / `encode_pages`: decoded [`Asset`] + per-corner UVs (+ the texture page of every
+//! face) → the same asset with a new `TEXCOORD_k`, one primitive per (source primitive, page).
 //!
-//! Purpose: write atlas UVs back into the asset and change nothing else.
+//! Purpose: write atlas UVs back into the asset and change nothing else. When the packer had to
+//! open several pages, give every primitive one output primitive per page it has faces on, so
+//! any renderer can bind one texture per page.
 //!
 //! Invariants:
-//! - Vertices are split only where needed: a primitive gets one output vertex per distinct
-//!   (source vertex, UV bits) pair, numbered in order of first use by its corners, so the output
-//!   is deterministic. Every vertex attribute (NORMAL, TANGENT, COLOR_n, JOINTS_n, WEIGHTS_n,
-//!   existing TEXCOORD_n, custom `_FOO`) and every morph-target attribute is copied element by
-//!   element in its original componentType, normalized flag and layout (quantized stays
-//!   quantized), sparse substitution applied.
+//! - Vertices are split only where needed: a primitive (a part, see below) gets one output
+//!   vertex per distinct (source vertex, UV bits) pair among its faces, numbered in order of
+//!   first use by its corners, so the output is deterministic. Every vertex attribute (NORMAL,
+//!   TANGENT, COLOR_n, JOINTS_n, WEIGHTS_n, existing TEXCOORD_n, custom `_FOO`) and every
+//!   morph-target attribute is copied element by element in its original componentType,
+//!   normalized flag and layout (quantized stays quantized), sparse substitution applied.
 //! - Triangle `i` of a primitive keeps its corners in the same order; strips and fans become
 //!   TRIANGLES lists in the decoder's triangle order. Indices are u16 when every index fits
 //!   below the primitive-restart value 65535, else u32.
+//! - Pages ([`encode_pages`]): the faces of a triangle primitive are grouped by page. The part
+//!   on its lowest page is written in place (same mesh, same primitive index); each part on a
+//!   higher page is a copy of the source primitive's JSON (material, `mode`, `extras`,
+//!   `extensions` including `KHR_materials_variants` mappings, `targets`) with its own
+//!   accessors, appended to the end of the same mesh's `primitives` in (primitive, page) order.
+//!   Within a part, triangles keep the source face order. So a primitive on one page is
+//!   written exactly as [`encode`] writes it (byte-identical output for single-page input),
+//!   the (mesh, primitive) index of every single-page primitive never moves, every part of a
+//!   mesh has the same number of morph targets, and the mesh's `weights` and `extras` (e.g.
+//!   `targetNames`) stay valid untouched. [`EncodedAsset::parts`] lists where each part went.
 //! - The JSON tree is the input's, edited only at: the rewritten primitives' `attributes`,
-//!   `indices`, `targets`, `mode`; appended accessors and buffer views; `bufferViews[*].buffer`
-//!   / `byteOffset` (rebased into one buffer); `buffers` (one buffer); external images (now a
-//!   `bufferView` + `mimeType`). Existing accessors keep their indices and data, so skins,
-//!   animations and unknown extensions that reference them stay valid. The one exception is
-//!   [`OldVertexData::DropWhenSafe`]: accessors that only the rewritten primitives used become
-//!   one-element zero accessors and their bytes leave the buffer, but only when no other
-//!   primitive, skin or animation references them and every extension in the document is known
-//!   not to reference accessors or buffer views.
+//!   `indices`, `targets`, `mode`; primitives appended for other pages; appended accessors and
+//!   buffer views; `bufferViews[*].buffer` / `byteOffset` (rebased into one buffer); `buffers`
+//!   (one buffer); external images (now a `bufferView` + `mimeType`). Existing accessors keep
+//!   their indices and data, so skins, animations and unknown extensions that reference them
+//!   stay valid. The one exception is [`OldVertexData::DropWhenSafe`]: accessors that only the
+//!   rewritten primitives used become one-element zero accessors and their bytes leave the
+//!   buffer, but only when no other primitive, skin or animation references them and every
+//!   extension in the document is known not to reference accessors or buffer views.
 //! - Vertex-attribute elements are 4-byte aligned (a padded `byteStride` when an element is not
 //!   a multiple of 4 bytes), as the spec requires; `min`/`max` are recomputed for POSITION
 //!   (attribute and morph target) and wherever the source accessor had them.
 //!
-//! Units: UVs as given (normally \[0,1\]), written as float VEC2.
+//! What a split cannot keep exact (documented, not detected):
+//! - The page is not recorded in the glTF: every part keeps the source `material`, so binding
+//!   page `p`'s texture to the parts on page `p` is the caller's job, from
+//!   [`EncodedAsset::parts`] (the report).
+//! - `extras` and unknown `extensions` of a split primitive are copied verbatim to every part.
+//!   Data in them that describes the primitive as a whole (an id, a vertex count, accessor
+//!   indices of an unknown extension) then describes the whole source primitive on each part.
+//!   Accessors such an extension references keep their data, because an unknown extension
+//!   disables [`OldVertexData::DropWhenSafe`].
+//! - Anything outside the document that addresses primitives by index sees the lowest-page
+//!   part at the old index and the other parts at new ones. (No glTF 2.0 property references a
+//!   primitive by index.)
+//!
+//! Units: UVs as given (normally \[0,1\] on their page), written as float VEC2. A page is an
+//! opaque `u32` index (pages need not be dense); every page is its own \[0,1\]² UV space.
 //!
 //! References: glTF 2.0 spec §3.6.2.4 (data alignment), §3.6.2.5 (accessor bounds: min/max are
-//! raw values, `normalized` has no effect), §3.7.2.1 (primitive modes), §4.4 (GLB).
+//! raw values, `normalized` has no effect), §3.7.2.1 (primitive modes), §3.7.2.2 (morph targets:
+//! every primitive of a mesh has the same number), §4.4 (GLB); `KHR_materials_variants`
+//! (mappings live on the primitive).
 use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -359,11 +388,11 @@ pub fn encode_pages(
         );
         let source_prim = asset.json.pointer(&path).cloned().unwrap_or(Value::Null);
         let uv_name = format!("TEXCOORD_{uv_set}");
-        for (part_number, (page, part_faces)) in
-            faces_by_page(prim.faces.clone(), face_page).into_iter().enumerate()
+        for (part_number, (page, part_faces)) in faces_by_page(prim.faces.clone(), face_page)
+            .into_iter()
+            .enumerate()
         {
-            let split =
-                split_vertices(prim, &part_faces, &asset.mesh_input.triangles, corner_uvs);
+            let split = split_vertices(prim, &part_faces, &asset.mesh_input.triangles, corner_uvs);
             let mut gather = |name: &str,
                               index: u64,
                               ref_path: &str,
