@@ -166,7 +166,11 @@ fn draw_line(rgb: &mut [u8], w: usize, h: usize, p: [f64; 2], q: [f64; 2], c: [u
     if p.iter().chain(&q).any(|x| !x.is_finite()) {
         return;
     }
-    let steps = (q[0] - p[0]).abs().max((q[1] - p[1]).abs()).ceil().clamp(1.0, 1e5) as usize;
+    let steps = (q[0] - p[0])
+        .abs()
+        .max((q[1] - p[1]).abs())
+        .ceil()
+        .clamp(1.0, 1e5) as usize;
     for s in 0..=steps {
         let t = s as f64 / steps as f64;
         let x = p[0] + (q[0] - p[0]) * t;
@@ -229,14 +233,32 @@ mod tests {
         );
         let (w, h, rgb) = decode(&render_preview(&atlas, 0, 64, 64));
         assert_eq!((w, h), (64, 64));
-        let px = |x: usize, y: usize| [rgb[(y * 64 + x) * 3], rgb[(y * 64 + x) * 3 + 1], rgb[(y * 64 + x) * 3 + 2]];
-        assert_eq!(px(10, 10), chart_color(0), "inside chart 0 (top-left, v down)");
+        let px = |x: usize, y: usize| {
+            [
+                rgb[(y * 64 + x) * 3],
+                rgb[(y * 64 + x) * 3 + 1],
+                rgb[(y * 64 + x) * 3 + 2],
+            ]
+        };
+        assert_eq!(
+            px(10, 10),
+            chart_color(0),
+            "inside chart 0 (top-left, v down)"
+        );
         assert_eq!(px(55, 55), chart_color(1), "inside chart 1");
         assert_ne!(chart_color(0), chart_color(1));
         assert_eq!(px(0, 30), [0, 0, 0], "page border");
-        assert_eq!(px(3, 3), px(3, 3).map(|_| px(3, 3)[0]), "background is grey");
+        assert_eq!(
+            px(3, 3),
+            px(3, 3).map(|_| px(3, 3)[0]),
+            "background is grey"
+        );
         assert_eq!(px(10, 3), [0x30; 3], "outline along v = 0.05");
-        assert_eq!(px(40, 20), [px(40, 20)[0]; 3], "outside both charts: checker");
+        assert_eq!(
+            px(40, 20),
+            [px(40, 20)[0]; 3],
+            "outside both charts: checker"
+        );
     }
 
     #[test]
@@ -250,12 +272,22 @@ mod tests {
             vec![0, 0],
         );
         let (_, _, rgb) = decode(&render_preview(&atlas, 0, 100, 100));
-        let at = |x: usize, y: usize| [rgb[(y * 100 + x) * 3], rgb[(y * 100 + x) * 3 + 1], rgb[(y * 100 + x) * 3 + 2]];
+        let at = |x: usize, y: usize| {
+            [
+                rgb[(y * 100 + x) * 3],
+                rgb[(y * 100 + x) * 3 + 1],
+                rgb[(y * 100 + x) * 3 + 2],
+            ]
+        };
         assert_eq!(at(50, 50), chart_color(0), "diagonal not drawn");
         atlas.face_page = vec![1, 1];
         let (_, _, rgb) = decode(&render_preview(&atlas, 0, 100, 100));
         assert_ne!(
-            [rgb[(50 * 100 + 50) * 3], rgb[(50 * 100 + 50) * 3 + 1], rgb[(50 * 100 + 50) * 3 + 2]],
+            [
+                rgb[(50 * 100 + 50) * 3],
+                rgb[(50 * 100 + 50) * 3 + 1],
+                rgb[(50 * 100 + 50) * 3 + 2]
+            ],
             chart_color(0),
             "faces of page 1 are not drawn on page 0"
         );

@@ -24,7 +24,8 @@ fn every_corpus_file_unwraps_and_passes_the_evaluator() {
         println!("unwrap_corpus: skipped (TEXATLAS_CORPUS_DIR is unset)");
         return;
     };
-    let out_dir = std::env::temp_dir().join(format!("texatlas-unwrap-corpus-{}", std::process::id()));
+    let out_dir =
+        std::env::temp_dir().join(format!("texatlas-unwrap-corpus-{}", std::process::id()));
     std::fs::create_dir_all(&out_dir).expect("temp dir");
     let mut files: Vec<PathBuf> = std::fs::read_dir(&corpus)
         .expect("corpus readable")
@@ -43,7 +44,11 @@ fn every_corpus_file_unwraps_and_passes_the_evaluator() {
         "file", "tris", "charts", "L2", "Linf", "packing", "time s"
     );
     for input in &files {
-        let name = input.file_name().and_then(|n| n.to_str()).unwrap_or("?").to_string();
+        let name = input
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or("?")
+            .to_string();
         if only.as_deref().is_some_and(|o| !name.contains(o)) {
             continue;
         }
@@ -53,7 +58,11 @@ fn every_corpus_file_unwraps_and_passes_the_evaluator() {
         }
     }
     let _ = std::fs::remove_dir_all(&out_dir);
-    assert!(failures.is_empty(), "corpus failures:\n{}", failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "corpus failures:\n{}",
+        failures.join("\n")
+    );
 }
 
 fn check(input: &Path, out_dir: &Path, name: &str) -> Result<(), String> {
@@ -70,7 +79,10 @@ fn check(input: &Path, out_dir: &Path, name: &str) -> Result<(), String> {
         .output()
         .map_err(|e| format!("cannot run texatlas: {e}"))?;
     if !run.status.success() {
-        return Err(format!("unwrap failed: {}", String::from_utf8_lossy(&run.stderr).trim()));
+        return Err(format!(
+            "unwrap failed: {}",
+            String::from_utf8_lossy(&run.stderr).trim()
+        ));
     }
     let report: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(&report_path).map_err(|e| format!("report: {e}"))?,
@@ -82,18 +94,31 @@ fn check(input: &Path, out_dir: &Path, name: &str) -> Result<(), String> {
         .unwrap_or_default();
     let k = *sets.first().ok_or("report lists no UV set")?;
     if sets.iter().any(|&s| s != k) {
-        return Err(format!("UV sets differ between primitives ({sets:?}); the evaluator reads one"));
+        return Err(format!(
+            "UV sets differ between primitives ({sets:?}); the evaluator reads one"
+        ));
     }
     let eval = Command::new("python3")
         .arg(eval_dir().join("atlas_eval.py"))
         .arg(&out)
         .arg("--input")
         .arg(input)
-        .args(["--uv", &k.to_string(), "--resolution", "1024", "--padding", "2", "--json"])
+        .args([
+            "--uv",
+            &k.to_string(),
+            "--resolution",
+            "1024",
+            "--padding",
+            "2",
+            "--json",
+        ])
         .output()
         .map_err(|e| format!("cannot run python3: {e}"))?;
     let e: serde_json::Value = serde_json::from_slice(&eval.stdout).map_err(|err| {
-        format!("evaluator output is not JSON ({err}): {}", String::from_utf8_lossy(&eval.stderr))
+        format!(
+            "evaluator output is not JSON ({err}): {}",
+            String::from_utf8_lossy(&eval.stderr)
+        )
     })?;
     let mut problems = Vec::new();
     for (key, pointer) in [
@@ -117,14 +142,21 @@ fn check(input: &Path, out_dir: &Path, name: &str) -> Result<(), String> {
         ("L2", "/stretch/l2", "/quality/stretch/l2"),
         ("Linf", "/stretch/linf", "/quality/stretch/linf"),
         ("charts", "/charts", "/quality/charts"),
-        ("packing", "/packing_efficiency", "/quality/packing_efficiency"),
+        (
+            "packing",
+            "/packing_efficiency",
+            "/quality/packing_efficiency",
+        ),
     ] {
         match (num(&e, eval_ptr), num(&report, ours_ptr)) {
             (Some(a), Some(b)) => {
                 let rel = (a - b).abs() / a.abs().max(1e-12);
                 agreement.push(format!("{label} {rel:.1e}"));
                 if rel > 0.01 {
-                    problems.push(format!("{label}: evaluator {a}, our report {b} ({:.2} % apart)", rel * 100.0));
+                    problems.push(format!(
+                        "{label}: evaluator {a}, our report {b} ({:.2} % apart)",
+                        rel * 100.0
+                    ));
                 }
             }
             (a, b) => problems.push(format!("{label}: evaluator {a:?}, our report {b:?}")),

@@ -221,7 +221,10 @@ mod tests {
             "solver":"hierarchical","uv_set":2,"output_format":"gltf"}"#;
         let o: OptionsJson = serde_json::from_str(text).unwrap();
         let s = o.to_settings().unwrap();
-        assert_eq!((s.atlas.pack.width_texels, s.atlas.pack.height_texels), (2048, 512));
+        assert_eq!(
+            (s.atlas.pack.width_texels, s.atlas.pack.height_texels),
+            (2048, 512)
+        );
         assert_eq!(s.atlas.pack.padding_texels, 4);
         assert_eq!(s.atlas.pack.density, TexelDensity::TexelsPerUnit(300.5));
         assert_eq!(s.atlas.pack.rotations, 4);

@@ -38,7 +38,10 @@ impl AtlasOptions {
             }
         }
         let p = &self.pack;
-        for (name, side) in [("width_texels", p.width_texels), ("height_texels", p.height_texels)] {
+        for (name, side) in [
+            ("width_texels", p.width_texels),
+            ("height_texels", p.height_texels),
+        ] {
             if side == 0 || side > MAX_PAGE_SIDE_TEXELS {
                 return Err(invalid(
                     name,
@@ -62,7 +65,10 @@ impl AtlasOptions {
         if p.rotations == 0 || p.rotations > 360 {
             return Err(invalid(
                 "rotations",
-                format!("{} is outside 1..=360; use 1 (no rotation) to 16", p.rotations),
+                format!(
+                    "{} is outside 1..=360; use 1 (no rotation) to 16",
+                    p.rotations
+                ),
             ));
         }
         if let TexelDensity::TexelsPerUnit(d) = p.density {

@@ -26,7 +26,12 @@ pub enum Stage {
 
 impl Stage {
     /// Every stage, in pipeline order.
-    pub const ALL: [Stage; 4] = [Stage::Segment, Stage::Parameterize, Stage::Pack, Stage::Measure];
+    pub const ALL: [Stage; 4] = [
+        Stage::Segment,
+        Stage::Parameterize,
+        Stage::Pack,
+        Stage::Measure,
+    ];
 
     /// Stable lower-case name (used on the wire and in progress bars).
     pub fn name(self) -> &'static str {

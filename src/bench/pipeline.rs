@@ -87,7 +87,7 @@ impl Quality {
             linf: f("/quality/stretch/linf").unwrap_or(f64::INFINITY),
             packing: f("/quality/packing_efficiency")?,
             flipped: u("/quality/flipped")?,
-            overlaps: u("/quality/overlap/exact_pairs")?,
+            overlaps: u("/quality/overlap/exact/pairs")?,
         })
     }
 }
@@ -346,7 +346,9 @@ pub fn format_table(rows: &[PipelineRow]) -> String {
             rows.iter()
                 .find(|r| r.file == f && r.tool == tool && r.error.is_none())
         };
-        let Some(ours) = get("texatlas") else { continue };
+        let Some(ours) = get("texatlas") else {
+            continue;
+        };
         let mut parts = Vec::new();
         for peer in ["xatlas", "uvunwrap"] {
             if let Some(p) = get(peer) {

@@ -3,9 +3,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Context as _;
+use texatlas::api::{OptionsJson, ResolutionJson};
 use texatlas::atlas::parameterize::ChartMesh;
 use texatlas::atlas::segment::{chart_mesh, check_chart_is_disk};
-use texatlas::api::{OptionsJson, ResolutionJson};
 use texatlas::atlas::NoProgress;
 use texatlas::bench::pipeline::{self, BenchConfig, PipelineRow, Quality};
 use texatlas::mesh::TriangleMesh;

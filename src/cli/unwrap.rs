@@ -113,7 +113,9 @@ fn parse_solver(s: &str) -> Result<SolverJson, String> {
         "auto" => Ok(SolverJson::Auto),
         "direct" => Ok(SolverJson::Direct),
         "hierarchical" => Ok(SolverJson::Hierarchical),
-        _ => Err(format!("`{s}` is not a solver; use auto, direct or hierarchical")),
+        _ => Err(format!(
+            "`{s}` is not a solver; use auto, direct or hierarchical"
+        )),
     }
 }
 
@@ -179,8 +181,7 @@ pub fn run(args: &UnwrapArgs) -> anyhow::Result<ExitCode> {
     let mut progress = Bar(bar.clone());
     let result = unwrap_asset(&loaded.asset, &settings, &mut progress);
     bar.finish_and_clear();
-    let unwrapped =
-        result.with_context(|| format!("unwrapping {}", args.input.display()))?;
+    let unwrapped = result.with_context(|| format!("unwrapping {}", args.input.display()))?;
     write(&args.output, &unwrapped.encoded.bytes)?;
     if let Some(path) = &args.report {
         let text = serde_json::to_string_pretty(&unwrapped.report)?;
@@ -213,7 +214,10 @@ fn page_path(path: &Path, page: u32) -> PathBuf {
     if page == 0 {
         return path.to_path_buf();
     }
-    let stem = path.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default();
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy())
+        .unwrap_or_default();
     let name = match path.extension() {
         Some(ext) => format!("{stem}-{page}.{}", ext.to_string_lossy()),
         None => format!("{stem}-{page}"),

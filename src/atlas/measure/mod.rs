@@ -439,7 +439,12 @@ pub fn measure_atlas(input: &MeasureInput<'_>) -> AtlasReport {
 
     // Range, bbox, packing.
     let eps = 1e-6;
-    let mut bbox = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+    let mut bbox = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
     let mut any_finite = false;
     for uv in input.corner_uvs {
         let mut out = 0;
@@ -454,7 +459,12 @@ pub fn measure_atlas(input: &MeasureInput<'_>) -> AtlasReport {
             any_finite = true;
             for c in uv {
                 let (u, v) = (f64::from(c[0]), f64::from(c[1]));
-                bbox = [bbox[0].min(u), bbox[1].min(v), bbox[2].max(u), bbox[3].max(v)];
+                bbox = [
+                    bbox[0].min(u),
+                    bbox[1].min(v),
+                    bbox[2].max(u),
+                    bbox[3].max(v),
+                ];
             }
         }
     }

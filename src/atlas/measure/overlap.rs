@@ -113,7 +113,12 @@ fn count_page(cands: &mut [Candidate], chart_of_face: &[u32], out: &mut ExactOve
     if n < 2 {
         return;
     }
-    let mut dom = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+    let mut dom = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
     for c in cands.iter() {
         dom = [
             dom[0].min(c.bbox[0]),
