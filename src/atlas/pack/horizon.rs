@@ -128,7 +128,14 @@ impl HorizonPage {
                 let wall = self.wall(side);
                 let prefix = prefix_sums(&wall);
                 for (k, o) in orientations.iter().enumerate() {
-                    if fits(o) {
+                    // An orientation whose padded footprint repeats an earlier one's (small or
+                    // symmetric charts) cannot do better: skip it.
+                    let repeated = orientations[..k].iter().any(|e| {
+                        e.width_texels == o.width_texels
+                            && e.height_texels == o.height_texels
+                            && e.dilated == o.dilated
+                    });
+                    if fits(o) && !repeated {
                         self.search(side, &wall, &prefix, k, o, &mut best);
                     }
                 }
@@ -174,7 +181,7 @@ impl HorizonPage {
     /// The wall a chart coming from `side` rests on, per canvas line along the slide axis, in
     /// the side's own coordinate `t` (for the minus sides `t = -position`, so every side is a
     /// "smallest t with t + prof ≥ wall" problem).
-    fn wall(&self, side: Side) -> Vec<i64> {
+    fn wall(&self, side: Side) -> Vec<i32> {
         let [x0, y0, x1, y1] = self.bbox.unwrap_or([0; 4]);
         let (lines, empty) = match side {
             Side::PlusY | Side::MinusY => (&self.cols, if side == Side::PlusY { y0 } else { y1 }),
@@ -185,11 +192,11 @@ impl HorizonPage {
             .iter()
             .map(|&(a, b)| {
                 let v = if (a, b) == EMPTY {
-                    i64::from(empty)
+                    empty
                 } else if plus {
-                    i64::from(b) + 1
+                    b + 1
                 } else {
-                    i64::from(a)
+                    a
                 };
                 if plus {
                     v
@@ -203,7 +210,7 @@ impl HorizonPage {
     fn search(
         &self,
         side: Side,
-        wall: &[i64],
+        wall: &[i32],
         prefix: &[i64],
         k: usize,
         o: &Orientation,
@@ -211,63 +218,120 @@ impl HorizonPage {
     ) {
         let [x0, y0, x1, y1] = self.bbox.unwrap_or([0; 4]);
         let [bw, bh] = self.bound;
-        let d: &Extents = o.dilated.as_ref().expect("fits() checked");
+        let Some(d) = o.dilated.as_ref() else {
+            return;
+        };
         let (w, h) = (o.width_texels as i32, o.height_texels as i32);
         // Along-axis profile and range, and the bound on t.
+        // Positions keep the box within the bound and touch the box's range: all positions
+        // wholly beside it see the same flat wall, so the touching one stands for them.
         let (lines, len, lo, hi, t_max) = match side {
-            Side::PlusY => (&d.cols, w, x1 - bw, x0 + bw - w, i64::from(y0 + bh - h)),
-            Side::MinusY => (&d.cols, w, x1 - bw, x0 + bw - w, i64::from(bh - y1)),
-            Side::PlusX => (&d.rows, h, y1 - bh, y0 + bh - h, i64::from(x0 + bw - w)),
-            Side::MinusX => (&d.rows, h, y1 - bh, y0 + bh - h, i64::from(bw - x1)),
+            Side::PlusY => (
+                &d.cols,
+                w,
+                (x1 - bw).max(x0 - w),
+                (x0 + bw - w).min(x1),
+                i64::from(y0 + bh - h),
+            ),
+            Side::MinusY => (
+                &d.cols,
+                w,
+                (x1 - bw).max(x0 - w),
+                (x0 + bw - w).min(x1),
+                i64::from(bh - y1),
+            ),
+            Side::PlusX => (
+                &d.rows,
+                h,
+                (y1 - bh).max(y0 - h),
+                (y0 + bh - h).min(y1),
+                i64::from(x0 + bw - w),
+            ),
+            Side::MinusX => (
+                &d.rows,
+                h,
+                (y1 - bh).max(y0 - h),
+                (y0 + bh - h).min(y1),
+                i64::from(bw - x1),
+            ),
         };
         let plus = matches!(side, Side::PlusY | Side::PlusX);
-        // prof[c]: the chart's near edge in line c, in the side's t coordinate.
-        let prof: Vec<Option<i64>> = lines
+        // prof[c]: the chart's near edge in line c, in the side's t coordinate; an empty line
+        // gets a huge value so that it never constrains (wall - prof stays very negative).
+        const NO_LINE: i32 = 1 << 29;
+        let prof: Vec<i32> = lines
             .iter()
             .map(|&(a, b)| {
                 if (a, b) == EMPTY {
-                    None
+                    NO_LINE
                 } else if plus {
-                    Some(i64::from(a))
+                    a
                 } else {
-                    Some(-(i64::from(b) + 1))
+                    -(b + 1)
                 }
             })
             .collect();
-        let mut order: Vec<usize> = (0..prof.len()).filter(|&c| prof[c].is_some()).collect();
+        let mut order: Vec<usize> = (0..prof.len()).filter(|&c| prof[c] != NO_LINE).collect();
         order.sort_by_key(|&c| (prof[c], c));
         let n = order.len() as i64;
         if n == 0 {
             return;
         }
-        let sum_prof: i64 = order.iter().map(|&c| prof[c].unwrap_or(0)).sum();
+        // The most protruding lines usually decide t: a lower bound of t at every position from
+        // them, computed line by line over all positions (contiguous, vectorizes), rejects most
+        // positions with one comparison.
+        let key = &order[..order.len().min(4)];
+        let sum_prof: i64 = order.iter().map(|&c| i64::from(prof[c])).sum();
         let dense = order.len() == prof.len();
         let lo = lo.max(0);
         let hi = hi.min(wall.len() as i32 - len);
-        for pos in lo..=hi {
+        if lo > hi {
+            return;
+        }
+        let npos = (hi - lo + 1) as usize;
+        let mut t_key = vec![i32::MIN; npos];
+        for &c in key {
+            let start = lo as usize + c;
+            let pc = prof[c];
+            for (t, &wv) in t_key.iter_mut().zip(&wall[start..start + npos]) {
+                *t = (*t).max(wv - pc);
+            }
+        }
+        const CHUNK: usize = 32;
+        for (i, &t0) in t_key.iter().enumerate() {
+            let pos = lo + i as i32;
             let p = pos as usize;
             let wall_sum = if dense {
                 prefix[p + len as usize] - prefix[p]
             } else {
-                order.iter().map(|&c| wall[p + c]).sum()
+                order.iter().map(|&c| i64::from(wall[p + c])).sum()
             };
             let base = sum_prof - wall_sum;
             let bound = best.map_or(i64::MAX, |b| b.0);
-            let mut t = i64::MIN;
+            let reject = |t: i64| t > t_max || n * t + base >= bound;
+            if reject(i64::from(t0)) {
+                continue;
+            }
+            let mut t = t0;
             let mut rejected = false;
-            for &c in &order {
-                let need = wall[p + c] - prof[c].unwrap_or(0);
-                if need > t {
-                    t = need;
-                    if t > t_max || n * t + base >= bound {
-                        rejected = true;
-                        break;
-                    }
+            let window = &wall[p..p + len as usize];
+            for (wc, pc) in window.chunks(CHUNK).zip(prof.chunks(CHUNK)) {
+                // Branch-free over a chunk (vectorizes), then one test.
+                let m = wc
+                    .iter()
+                    .zip(pc)
+                    .map(|(a, b)| a - b)
+                    .fold(i32::MIN, i32::max);
+                t = t.max(m);
+                if reject(i64::from(t)) {
+                    rejected = true;
+                    break;
                 }
             }
             if rejected {
                 continue;
             }
+            let t = i64::from(t);
             let waste = n * t + base;
             let (x, y) = match side {
                 Side::PlusY => (pos, t as i32),
@@ -287,12 +351,12 @@ impl HorizonPage {
     }
 }
 
-fn prefix_sums(v: &[i64]) -> Vec<i64> {
+fn prefix_sums(v: &[i32]) -> Vec<i64> {
     let mut out = Vec::with_capacity(v.len() + 1);
     let mut s = 0i64;
     out.push(0);
     for &x in v {
-        s += x;
+        s += i64::from(x);
         out.push(s);
     }
     out

@@ -163,7 +163,7 @@ pub const MAX_FIT_TRIALS: usize = 16;
 
 /// [`TexelDensity::FitToPage`] stops when the largest density known to fit is within this
 /// ratio of the smallest known not to fit.
-pub const FIT_TOLERANCE: f64 = 2e-3;
+pub const FIT_TOLERANCE: f64 = 3e-3;
 
 /// Places every chart on pages without overlap, keeping `padding_texels` between charts and from
 /// the page edge, all UVs in \[0,1\]. `monitor((done, total))` is called between charts; `Break`
@@ -322,9 +322,10 @@ struct Trial {
     texels_per_unit: f64,
     placed: Vec<Option<Placed>>,
     pages: Vec<horizon::HorizonPage>,
-    /// Σ area_m2 of the charts that did not fit (single-page trials).
+    /// Σ area_m2 of the charts not placed (single-page trials stop at the first that does not
+    /// fit).
     unplaced_area_m2: f64,
-    /// Charts that did not fit (single-page trials).
+    /// 1 when a single-page trial stopped at a chart that did not fit, else 0.
     unplaced: usize,
     /// The largest, over charts, of the smallest page-size ratio any orientation needs.
     worst_size_ratio: f64,
@@ -412,8 +413,17 @@ impl Context<'_, '_> {
                     });
                 }
                 None => {
+                    // This density fails; what is left tells the search how much to shrink.
                     trial.unplaced += 1;
-                    trial.unplaced_area_m2 += self.prepared[i].area_m2;
+                    trial.unplaced_area_m2 = self.prepared[i].area_m2
+                        + self
+                            .order
+                            .iter()
+                            .skip_while(|&&j| j != i)
+                            .skip(1)
+                            .map(|&j| self.prepared[j].area_m2)
+                            .sum::<f64>();
+                    break;
                 }
             }
         }
@@ -481,8 +491,10 @@ fn unit(v: f64) -> f64 {
 }
 
 /// The largest density (within [`FIT_TOLERANCE`]) at which one page holds every chart: a
-/// secant-like search on log density, each step from the last trial's fill ratio, kept inside
-/// the bracket of known fit / no-fit densities (bisection when the estimate leaves it).
+/// search on log density: steps from the last trial's fill ratio until a density that fits and
+/// one that does not are known, then bisection. A failing trial stops at its first chart that
+/// does not fit, so it costs at most a full one. Deterministic; at most [`MAX_FIT_TRIALS`]
+/// trials (+1 last-resort trial at a density where every chart is below a texel).
 fn fit_to_page(
     ctx: &Context<'_, '_>,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
@@ -538,21 +550,13 @@ fn fit_to_page(
                 break;
             }
         }
-        // Next guess from the fill ratio (a packing's size is about linear in density).
-        let mut next = clamp_d(d / ratio.max(1e-3));
-        if fitted && next <= d * (1.0 + FIT_TOLERANCE / 2.0) {
-            // Fits snugly: probe just above.
-            next = d * (1.0 + FIT_TOLERANCE);
-        }
-        let inside = |v: f64| lo.is_none_or(|l| v > l) && no_fit.is_none_or(|n| v < n);
-        if !inside(next) {
-            next = match (lo, no_fit) {
-                (Some(l), Some(n)) => (l * n).sqrt(),
-                (Some(l), None) => l * 2.0,
-                (None, Some(n)) => n / 2.0,
-                (None, None) => d,
-            };
-        }
+        // Once bracketed, bisect (log scale); before, step by the fill ratio (a packing's size
+        // is about linear in density), growing by at least 5% while it fits.
+        let next = match (lo, no_fit) {
+            (Some(l), Some(n)) => (l * n).sqrt(),
+            _ if fitted => d / ratio.min(1.0 / 1.05),
+            _ => d / ratio,
+        };
         d = clamp_d(next);
     }
     let t = match fit {

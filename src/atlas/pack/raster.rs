@@ -99,21 +99,42 @@ impl Mask {
     }
 
     /// The mask grown by `r` texels in the Chebyshev metric, clipped to the same grid (callers
-    /// leave an `r`-texel margin). Cost: O(width × height / 64 × (1 + r)) plus O(runs × 1).
+    /// leave an `r`-texel margin). Cost: O(width × height / 64 × r).
     pub fn dilate(&self, r: u32) -> Mask {
         if r == 0 {
             return self.clone();
         }
-        // Horizontal pass: every run [a, b] becomes [a - r, b + r].
-        let mut horizontal = Mask::new(self.width, self.height);
-        for y in 0..self.height {
-            for (a, b) in self.runs(y) {
-                horizontal.set_span(y, a.saturating_sub(r), b.saturating_add(r));
+        let wpr = self.words_per_row;
+        // Horizontal pass: OR of the row shifted by -r ..= r, word by word with carries.
+        let mut horizontal = self.clone();
+        for y in 0..self.height as usize {
+            let row = &self.bits[y * wpr..][..wpr];
+            let out = &mut horizontal.bits[y * wpr..][..wpr];
+            for s in 1..=r as usize {
+                let (ws, bs) = (s / 64, (s % 64) as u32);
+                for k in 0..wpr {
+                    // Towards higher columns: bit x goes to x + s.
+                    if k >= ws {
+                        let mut v = row[k - ws] << bs;
+                        if bs > 0 && k > ws {
+                            v |= row[k - ws - 1] >> (64 - bs);
+                        }
+                        out[k] |= v;
+                    }
+                    // Towards lower columns: bit x goes to x - s.
+                    if k + ws < wpr {
+                        let mut v = row[k + ws] >> bs;
+                        if bs > 0 && k + ws + 1 < wpr {
+                            v |= row[k + ws + 1] << (64 - bs);
+                        }
+                        out[k] |= v;
+                    }
+                }
             }
         }
+        horizontal.clear_padding_bits();
         // Vertical pass: row y is the OR of rows y - r ..= y + r (word-wise).
         let mut out = Mask::new(self.width, self.height);
-        let wpr = self.words_per_row;
         for y in 0..self.height as usize {
             let lo = y.saturating_sub(r as usize);
             let hi = (y + r as usize).min(self.height as usize - 1);
@@ -126,6 +147,18 @@ impl Mask {
         out
     }
 
+    /// Clears the bits past `width` in each row's last word.
+    fn clear_padding_bits(&mut self) {
+        let rem = self.width % 64;
+        if rem == 0 || self.words_per_row == 0 {
+            return;
+        }
+        let keep = (1u64 << rem) - 1;
+        for y in 0..self.height as usize {
+            self.bits[y * self.words_per_row + self.words_per_row - 1] &= keep;
+        }
+    }
+
     /// The runs of set texels of row `y`, as inclusive `(first, last)` columns, left to right.
     pub fn runs(&self, y: u32) -> Vec<(u32, u32)> {
         let mut out = Vec::new();
@@ -134,28 +167,15 @@ impl Mask {
         }
         let row = &self.bits[y as usize * self.words_per_row..][..self.words_per_row];
         let mut start: Option<u32> = None;
-        for (k, &word) in row.iter().enumerate() {
-            let base = (k as u32) << 6;
-            if word == 0 {
-                if let Some(s) = start.take() {
-                    out.push((s, base - 1));
+        for x in 0..self.width {
+            let set = (row[(x >> 6) as usize] >> (x & 63)) & 1 == 1;
+            match (set, start) {
+                (true, None) => start = Some(x),
+                (false, Some(s)) => {
+                    out.push((s, x - 1));
+                    start = None;
                 }
-                continue;
-            }
-            if word == u64::MAX {
-                start.get_or_insert(base);
-                continue;
-            }
-            for bit in 0..64u32 {
-                let set = (word >> bit) & 1 == 1;
-                match (set, start) {
-                    (true, None) => start = Some(base + bit),
-                    (false, Some(s)) => {
-                        out.push((s, base + bit - 1));
-                        start = None;
-                    }
-                    _ => {}
-                }
+                _ => {}
             }
         }
         if let Some(s) = start {
@@ -164,31 +184,58 @@ impl Mask {
         out
     }
 
-    /// Per column, the first and last set row (`None` for an empty column).
+    /// Per column, the first and last set row (`None` for an empty column). Cost:
+    /// O(height × width / 64 + width).
     pub fn column_extents(&self) -> Vec<Option<(u32, u32)>> {
-        let mut out: Vec<Option<(u32, u32)>> = vec![None; self.width as usize];
+        let wpr = self.words_per_row;
+        let mut first = vec![u32::MAX; self.width as usize];
+        let mut last = vec![0u32; self.width as usize];
+        let mut seen = vec![0u64; wpr];
         for y in 0..self.height {
-            for (a, b) in self.runs(y) {
-                for e in &mut out[a as usize..=b as usize] {
-                    *e = Some(match *e {
-                        None => (y, y),
-                        Some((lo, _)) => (lo, y),
-                    });
+            let row = &self.bits[y as usize * wpr..][..wpr];
+            for k in 0..wpr {
+                let mut new = row[k] & !seen[k];
+                seen[k] |= row[k];
+                while new != 0 {
+                    let b = new.trailing_zeros();
+                    first[k * 64 + b as usize] = y;
+                    new &= new - 1;
                 }
             }
         }
-        out
+        seen.iter_mut().for_each(|w| *w = 0);
+        for y in (0..self.height).rev() {
+            let row = &self.bits[y as usize * wpr..][..wpr];
+            for k in 0..wpr {
+                let mut new = row[k] & !seen[k];
+                seen[k] |= row[k];
+                while new != 0 {
+                    let b = new.trailing_zeros();
+                    last[k * 64 + b as usize] = y;
+                    new &= new - 1;
+                }
+            }
+        }
+        first
+            .iter()
+            .zip(&last)
+            .map(|(&a, &b)| (a != u32::MAX).then_some((a, b)))
+            .collect()
     }
 
-    /// Per row, the first and last set column (`None` for an empty row).
+    /// Per row, the first and last set column (`None` for an empty row). Cost:
+    /// O(height × width / 64).
     pub fn row_extents(&self) -> Vec<Option<(u32, u32)>> {
-        (0..self.height)
+        let wpr = self.words_per_row;
+        (0..self.height as usize)
             .map(|y| {
-                let runs = self.runs(y);
-                match (runs.first(), runs.last()) {
-                    (Some(f), Some(l)) => Some((f.0, l.1)),
-                    _ => None,
-                }
+                let row = &self.bits[y * wpr..][..wpr];
+                let a = row.iter().position(|&w| w != 0)?;
+                let b = row.iter().rposition(|&w| w != 0)?;
+                Some((
+                    (a * 64) as u32 + row[a].trailing_zeros(),
+                    (b * 64) as u32 + 63 - row[b].leading_zeros(),
+                ))
             })
             .collect()
     }
@@ -397,6 +444,43 @@ mod tests {
         }
         assert_eq!(d.count(), 50);
         assert_eq!(m.runs(4), vec![(3, 3), (66, 66)]);
+        // Across word boundaries and with a radius beyond a word, against a brute force.
+        let mut big = Mask::new(300, 5);
+        for x in [0u32, 63, 64, 127, 190, 299] {
+            big.set_span(2, x, x);
+        }
+        big.set_span(0, 100, 140);
+        for r in [1u32, 5, 63, 64, 70] {
+            let d = big.dilate(r);
+            for y in 0..5i64 {
+                for x in 0..300i64 {
+                    let want = (0..5i64).any(|yy| {
+                        (0..300i64).any(|xx| {
+                            big.get(xx, yy)
+                                && (xx - x).abs() <= r as i64
+                                && (yy - y).abs() <= r as i64
+                        })
+                    });
+                    assert_eq!(d.get(x, y), want, "r {r} ({x},{y})");
+                }
+            }
+            let ext = d.column_extents();
+            let rows = d.row_extents();
+            for x in 0..300u32 {
+                let col: Vec<u32> = (0..5).filter(|&y| d.get(x as i64, y as i64)).collect();
+                assert_eq!(
+                    ext[x as usize],
+                    col.first().map(|&a| (a, *col.last().unwrap()))
+                );
+            }
+            for y in 0..5u32 {
+                let row: Vec<u32> = (0..300).filter(|&x| d.get(x as i64, y as i64)).collect();
+                assert_eq!(
+                    rows[y as usize],
+                    row.first().map(|&a| (a, *row.last().unwrap()))
+                );
+            }
+        }
         assert_eq!(d.column_extents()[3], Some((2, 6)));
         assert_eq!(d.row_extents()[4], Some((1, 68)));
     }
