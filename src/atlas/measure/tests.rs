@@ -1,5 +1,5 @@
 //! Hand-computed cases for `measure_atlas`: each states its input and the exact expected values.
-use super::stretch::{percentile_linear, percentile_weighted, stable_order};
+use super::numpy::{np_sum, percentile_linear, percentile_weighted, stable_order};
 use super::*;
 use crate::mesh::MeshInput;
 
@@ -298,4 +298,15 @@ fn percentiles_follow_numpy() {
     assert_eq!(percentile_weighted(&x, &w, &o, 50.0), Some(2.0));
     assert_eq!(percentile_weighted(&x, &w, &o, 51.0), Some(3.0));
     assert_eq!(percentile_weighted(&x, &w, &o, 5.0), Some(1.0));
+}
+
+#[test]
+fn pairwise_sum_matches_numpy() {
+    // numpy 2.x: np.sum(np.full(1000, 0.1)) == 100.00000000000001; a sequential sum gives
+    // 99.9999999999986.
+    let x = vec![0.1f64; 1000];
+    assert_eq!(np_sum(&x), 100.000_000_000_000_01);
+    assert_eq!(x.iter().fold(0.0, |s, &v| s + v), 99.999_999_999_998_6);
+    assert_eq!(np_sum(&[1.0, 2.0, 3.0]), 6.0);
+    assert_eq!(np_sum(&[]), 0.0);
 }
