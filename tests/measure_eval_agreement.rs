@@ -77,7 +77,9 @@ fn test_uvs(mesh: &TriangleMesh) -> Vec<[[f32; 2]; 3]> {
     for f in mesh.faces() {
         let g = face_group[f.index()];
         let ax = axes[g / 2];
-        let extent = (ghi[g][0] - glo[g][0]).max(ghi[g][1] - glo[g][1]).max(1e-30);
+        let extent = (ghi[g][0] - glo[g][0])
+            .max(ghi[g][1] - glo[g][1])
+            .max(1e-30);
         let scale = 0.9 * cell / extent;
         let squeeze = if g % 2 == 1 { 0.6 } else { 1.0 };
         let mut origin = [(g % side) as f64 * cell, (g / side) as f64 * cell];
@@ -102,8 +104,7 @@ fn test_uvs(mesh: &TriangleMesh) -> Vec<[[f32; 2]; 3]> {
             if mesh.vertex_face_count(v) == 1 {
                 let t = &mut uvs[f.index()];
                 let (a, b, p) = (t[(k + 1) % 3], t[(k + 2) % 3], t[k]);
-                let [ax, ay, bx, by, px, py] =
-                    [a[0], a[1], b[0], b[1], p[0], p[1]].map(f64::from);
+                let [ax, ay, bx, by, px, py] = [a[0], a[1], b[0], b[1], p[0], p[1]].map(f64::from);
                 let (dx, dy) = (bx - ax, by - ay);
                 let l2 = dx * dx + dy * dy;
                 if l2 == 0.0 {
@@ -217,7 +218,10 @@ fn expectations(r: &AtlasReport) -> Vec<(&'static str, Expect)> {
             "/overlap/raster_skipped_triangles",
             Count(s.raster_skipped_triangles),
         ),
-        ("/padding/violation_texels", Count(r.padding.violation_texels)),
+        (
+            "/padding/violation_texels",
+            Count(r.padding.violation_texels),
+        ),
     ]);
     if let Some(b) = r.uv_bbox {
         v.extend([
@@ -287,7 +291,10 @@ fn compare(ours: &AtlasReport, eval: &Value) -> Vec<String> {
         ("/texel_density", ours.texel_density.is_some()),
     ] {
         if eval.pointer(key).is_some_and(|v| !v.is_null()) != obj {
-            bad.push(format!("{key}: present here {obj}, evaluator {:?}", eval.pointer(key)));
+            bad.push(format!(
+                "{key}: present here {obj}, evaluator {:?}",
+                eval.pointer(key)
+            ));
         }
     }
     for (key, expect) in expectations(ours) {
@@ -296,9 +303,9 @@ fn compare(ours: &AtlasReport, eval: &Value) -> Vec<String> {
             (Expect::Count(n), Some(t)) => t.as_u64() == Some(*n),
             (Expect::Bool(b), Some(t)) => t.as_bool() == Some(*b),
             (Expect::Float(None), Some(t)) => t.is_null(),
-            (Expect::Float(Some(x)), Some(t)) => t.as_f64().is_some_and(|y| {
-                (x - y).abs() <= 1e-9 * x.abs().max(y.abs()) + 1e-12
-            }),
+            (Expect::Float(Some(x)), Some(t)) => t
+                .as_f64()
+                .is_some_and(|y| (x - y).abs() <= 1e-9 * x.abs().max(y.abs()) + 1e-12),
             (_, None) => false,
         };
         if !ok {
@@ -434,7 +441,11 @@ fn run_all(assets: Vec<(String, Vec<u8>, u32, bool)>, evaluator: &Path) {
     }
     let _ = std::fs::remove_dir_all(&dir);
     assert!(compared > 0, "nothing was compared");
-    assert!(failures.is_empty(), "disagreements:\n{}", failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "disagreements:\n{}",
+        failures.join("\n")
+    );
 }
 
 #[test]
@@ -466,7 +477,10 @@ fn measure_agrees_with_the_evaluator_on_fixtures_and_generated_meshes() {
                 fixtures::uv_sphere(12, 24, 0.7),
             ],
         ),
-        ("gen_cylinder", vec![fixtures::cylinder_open(16, 5, 0.5, 2.0)]),
+        (
+            "gen_cylinder",
+            vec![fixtures::cylinder_open(16, 5, 0.5, 2.0)],
+        ),
         ("gen_cube", vec![fixtures::cube_split_faces()]),
         ("gen_two_components", vec![fixtures::two_components()]),
     ];
@@ -498,10 +512,114 @@ fn measure_agrees_with_the_evaluator_on_the_corpus() {
                 return None;
             }
             let bytes = std::fs::read(p).ok()?;
-            // The 1M-triangle asset is measured and timed, not compared (evaluator too slow).
+            // The 1M-triangle asset is measured and timed, not compared (evaluator too slow),
+            // and only in release builds.
             let huge = bytes.len() > 10_000_000;
+            if huge && cfg!(debug_assertions) {
+                println!("{name}: skipped in a debug build (timed in release only)");
+                return None;
+            }
             Some((name, bytes, 1024, huge))
         })
         .collect();
     run_all(assets, &evaluator);
+}
+
+/// UVs of a well-formed atlas for timing: every face in its own square cell (no overlap, every
+/// edge a seam: the most charts possible), as `tests/corpus_roundtrip.rs` makes them.
+fn per_face_cell_uvs(faces: usize) -> Vec<[[f32; 2]; 3]> {
+    let side = (faces as f64).sqrt().ceil().max(1.0) as usize;
+    let cell = 1.0 / side as f32;
+    (0..faces)
+        .map(|f| {
+            let (x, y) = ((f % side) as f32 * cell, (f / side) as f32 * cell);
+            [[x, y], [x + 0.9 * cell, y], [x, y + 0.9 * cell]]
+        })
+        .collect()
+}
+
+/// CPU time of this process (all threads), seconds, from `/proc/self/stat` (Linux; 0 elsewhere).
+/// The machine is shared, so wall time overstates the cost; CPU time does not.
+fn process_cpu_s() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return 0.0;
+    };
+    // Fields after the parenthesised command: utime and stime are fields 14 and 15.
+    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = |i: usize| f.get(i).and_then(|x| x.parse::<f64>().ok()).unwrap_or(0.0);
+    (ticks(11) + ticks(12)) / 100.0
+}
+
+fn time_measure(name: &str, mesh: &TriangleMesh, uvs: &[[[f32; 2]; 3]], resolution: u32) {
+    let pages = vec![0u32; uvs.len()];
+    let cpu0 = process_cpu_s();
+    let t0 = Instant::now();
+    let r = measure_atlas(&MeasureInput {
+        mesh,
+        corner_uvs: uvs,
+        face_page: &pages,
+        num_pages: 1,
+        width_texels: resolution,
+        height_texels: resolution,
+        padding_texels: 2,
+    });
+    println!(
+        "{name:<40} {:>8} faces {:>8} charts  {resolution}²  exact pairs {:>8}  wall {:>8.1} ms  cpu {:>6.0} ms",
+        r.triangles,
+        r.charts,
+        r.overlap.exact.pairs,
+        t0.elapsed().as_secs_f64() * 1e3,
+        (process_cpu_s() - cpu0) * 1e3
+    );
+}
+
+/// Timings of `measure_atlas` on overlap-free atlases (printed, not asserted: the machine is
+/// shared). Release builds only; the corpus files when `TEXATLAS_CORPUS_DIR` is set.
+#[test]
+fn measure_speed() {
+    if cfg!(debug_assertions) {
+        println!("measure_speed: skipped (debug build; run with --release)");
+        return;
+    }
+    // A 1M-face grid mapped isometrically: one chart.
+    let grid = fixtures::grid(720, 720);
+    let mesh = TriangleMesh::build(&grid).expect("grid").mesh;
+    let uvs: Vec<[[f32; 2]; 3]> = mesh
+        .faces()
+        .map(|f| {
+            mesh.face_positions(f)
+                .map(|p| [(p[0] / 720.0) as f32, (p[1] / 720.0) as f32])
+        })
+        .collect();
+    time_measure("grid 720x720, one chart", &mesh, &uvs, 1024);
+    time_measure("grid 720x720, one chart", &mesh, &uvs, 4096);
+    time_measure(
+        "grid 720x720, per-face charts",
+        &mesh,
+        &per_face_cell_uvs(mesh.num_faces()),
+        1024,
+    );
+    let Some(corpus) = std::env::var_os("TEXATLAS_CORPUS_DIR") else {
+        return;
+    };
+    for name in ["bunny.glb", "beast_sub2_1M.glb"] {
+        let Ok(bytes) = std::fs::read(PathBuf::from(&corpus).join(name)) else {
+            continue;
+        };
+        let asset = decode(&bytes, &Resources::new(), &DecodeLimits::default()).expect("decode");
+        let mesh = TriangleMesh::build(asset.mesh_input()).expect("build").mesh;
+        time_measure(
+            &format!("{name}, per-face charts"),
+            &mesh,
+            &per_face_cell_uvs(mesh.num_faces()),
+            1024,
+        );
+        time_measure(
+            &format!("{name}, folded test UVs"),
+            &mesh,
+            &test_uvs(&mesh),
+            1024,
+        );
+    }
 }

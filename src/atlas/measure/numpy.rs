@@ -70,8 +70,9 @@ pub(super) fn percentile_linear(sorted: &[f64], q: f64) -> Option<f64> {
         return None;
     }
     let quantile = q / 100.0;
-    // numpy's `_compute_virtual_index` with alpha = beta = 1.
-    let virtual_index = n as f64 * quantile + (1.0 + quantile * -1.0) - 1.0;
+    // numpy's `_compute_virtual_index` with alpha = beta = 1: `n·q + (1 + q·(-1)) - 1`
+    // (`1 + q·(-1)` is exactly `1 - q`).
+    let virtual_index = n as f64 * quantile + (1.0 - quantile) - 1.0;
     let below = virtual_index.floor().clamp(0.0, (n - 1) as f64);
     let gamma = virtual_index - below;
     let i = below as usize;
@@ -111,8 +112,10 @@ pub(super) fn percentile_weighted(x: &[f64], w: &[f64], order: &[u32], q: f64) -
 }
 
 /// Indices of `x` stably sorted ascending (numpy `argsort(kind="stable")`).
+/// Sorts (value, index) pairs with the index as tie-break: the same permutation as a stable
+/// sort, without indirect (cache-missing) comparisons.
 pub(super) fn stable_order(x: &[f64]) -> Vec<u32> {
-    let mut o: Vec<u32> = (0..x.len() as u32).collect();
-    o.sort_by(|&a, &b| x[a as usize].total_cmp(&x[b as usize]));
-    o
+    let mut keyed: Vec<(f64, u32)> = x.iter().zip(0u32..).map(|(&v, i)| (v, i)).collect();
+    keyed.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    keyed.into_iter().map(|(_, i)| i).collect()
 }

@@ -40,12 +40,7 @@ struct FixedTriangle {
 }
 
 /// Calls `run(j, lo, hi)` for every row `j` whose texel centres `lo..=hi` the triangle covers.
-fn for_each_run(
-    t: &FixedTriangle,
-    s: i64,
-    [w, h]: [i64; 2],
-    mut run: impl FnMut(i64, i64, i64),
-) {
+fn for_each_run(t: &FixedTriangle, s: i64, [w, h]: [i64; 2], mut run: impl FnMut(i64, i64, i64)) {
     let half = s / 2;
     let (ymin, ymax) = (t.y.iter().min().unwrap(), t.y.iter().max().unwrap());
     // Rows whose sample y = j·S + S/2 lies in [ymin, ymax].

@@ -152,7 +152,10 @@ fn folded_triangle_is_flipped_and_overlaps_its_neighbour() {
     // Face 1 = (v0, v2, v3) with v3's UV moved across the shared diagonal: still glued to
     // face 0 (same chart) but clockwise, inside face 0.
     let uv = [[0.1, 0.1], [0.9, 0.1], [0.9, 0.9], [0.6, 0.4]];
-    let uvs: Vec<[[f32; 2]; 3]> = SQUARE_TRIS.iter().map(|t| t.map(|v| uv[v as usize])).collect();
+    let uvs: Vec<[[f32; 2]; 3]> = SQUARE_TRIS
+        .iter()
+        .map(|t| t.map(|v| uv[v as usize]))
+        .collect();
     let c = case(&SQUARE, &SQUARE_TRIS, &uvs);
     let r = measure(&c, [64, 64], 0, 1);
     assert_eq!(r.charts, 1);
@@ -176,7 +179,10 @@ fn mirrored_chart_is_minority_not_flipped() {
     // Second square mirrored in u (smaller, so it is the minority).
     uvs.extend(square_uvs([0.9, 0.5], [-0.3, 0.3]));
     let r = measure(&case(&pos, &tris, &uvs), [64, 64], 0, 1);
-    assert_eq!((r.charts, r.flipped, r.charts_minority_orientation), (2, 0, 1));
+    assert_eq!(
+        (r.charts, r.flipped, r.charts_minority_orientation),
+        (2, 0, 1)
+    );
     assert!(r.per_chart[1].signed_uv_area < 0.0 && r.per_chart[0].signed_uv_area > 0.0);
 }
 
@@ -254,7 +260,10 @@ fn shared_edge_samples_are_covered_once_and_pages_can_be_rectangular() {
     assert_eq!(r.overlap.sampled.overlapping_texels, 0);
     assert_eq!(r.texel_utilization, 1.0);
     assert_eq!(r.padding.violation_texels, 0);
-    assert!(close(r.texel_density.and_then(|d| d.texels_per_unit), 32f64.sqrt()));
+    assert!(close(
+        r.texel_density.and_then(|d| d.texels_per_unit),
+        32f64.sqrt()
+    ));
 }
 
 #[test]
