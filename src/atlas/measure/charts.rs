@@ -11,7 +11,7 @@
 //!
 //! Cost: O(faces) — one sort over the vertices (not the corners), then counting sorts into
 //! per-vertex and per-corner buckets, each bucket sorted on its own (a handful of entries).
-use super::stretch::Sum;
+use super::numpy::np_sum;
 use crate::mesh::{FaceId, TriangleMesh, VertexId};
 
 /// Connectivity results.
@@ -32,12 +32,14 @@ pub(super) struct Connectivity {
     pub open_border_length_3d_m: f64,
 }
 
-/// Bit pattern with `-0.0` folded onto `0.0`.
-fn fold64(x: f64) -> u64 {
+/// Bit pattern with `-0.0` folded onto `0.0`, as a signed integer: position ids are then
+/// numbered in the evaluator's order (it sorts the `int64` views of the bits), so that sums
+/// over seams run in the same order.
+fn fold64(x: f64) -> i64 {
     if x == 0.0 {
         0
     } else {
-        x.to_bits()
+        x.to_bits() as i64
     }
 }
 
@@ -98,7 +100,7 @@ pub(super) fn connectivity(
     let nf = mesh.num_faces();
     // 1. Position ids (glTF mesh + position bits), per mesh vertex: one sort over the vertices.
     let nv = mesh.num_vertices();
-    let mut vkeys: Vec<(u32, [u64; 3], u32)> = (0..nv as u32)
+    let mut vkeys: Vec<(u32, [i64; 3], u32)> = (0..nv as u32)
         .map(|v| {
             let vid = VertexId(v);
             let p = mesh.position(vid);
@@ -206,8 +208,10 @@ pub(super) fn connectivity(
     let plo: Vec<u32> = (0..3 * nf).map(|e| ends(&corner_pid, e).0).collect();
     let (offsets, mut order) = bucket_order(num_pids, &plo);
     drop(plo);
-    let (mut seam_edges, mut seam_len, mut boundary, mut open) =
-        (0usize, Sum::default(), Sum::default(), Sum::default());
+    let mut seam_edges = 0usize;
+    let mut seam_len = Vec::new();
+    // Per half-edge: 1 = chart boundary (seam side), 2 = open border, 0 = neither.
+    let mut boundary_kind = vec![0u8; 3 * nf];
     let len = |e: u32| edge_len_m[e as usize / 3][e as usize % 3];
     for b in 0..num_pids {
         let bucket = &mut order[offsets[b] as usize..offsets[b + 1] as usize];
@@ -225,30 +229,36 @@ pub(super) fn connectivity(
             let mut any_seam = false;
             for &e in run {
                 if proper && uv_edge_unique[e as usize] {
-                    boundary.add(len(e));
-                    if shared {
-                        any_seam = true;
-                    } else {
-                        open.add(len(e));
-                    }
+                    boundary_kind[e as usize] = if shared { 1 } else { 2 };
+                    any_seam |= shared;
                 }
             }
             if any_seam {
                 seam_edges += 1;
                 // Every half-edge of the run joins the same two points: same length bits.
-                seam_len.add(len(run[0]));
+                seam_len.push(len(run[0]));
             }
             i = j;
         }
     }
 
+    // The evaluator sums half-edge lengths slot-major (all slot-0 half-edges, then 1, then 2).
+    let slot_major = |keep: &dyn Fn(u8) -> bool| -> Vec<f64> {
+        (0..3)
+            .flat_map(|k| (0..nf).map(move |f| 3 * f + k))
+            .filter(|&e| keep(boundary_kind[e]))
+            .map(|e| len(e as u32))
+            .collect()
+    };
+    let boundary = np_sum(&slot_major(&|b| b != 0));
+    let open = np_sum(&slot_major(&|b| b == 2));
     Connectivity {
         chart_of_face,
         num_charts: num_charts as usize,
         unique_corners: num_cids,
         seam_edges,
-        seam_length_3d_m: seam_len.value(),
-        boundary_length_3d_m: boundary.value(),
-        open_border_length_3d_m: open.value(),
+        seam_length_3d_m: np_sum(&seam_len),
+        boundary_length_3d_m: boundary,
+        open_border_length_3d_m: open,
     }
 }

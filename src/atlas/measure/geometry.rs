@@ -43,6 +43,11 @@ fn nan_max(a: f64, b: f64) -> f64 {
     }
 }
 
+/// The evaluator's `~(x > tol)`: true when `x <= tol` or either is NaN (NaN is degenerate).
+fn not_greater(x: f64, tol: f64) -> bool {
+    x.partial_cmp(&tol) != Some(std::cmp::Ordering::Greater)
+}
+
 /// UV corner as `f64` (exact).
 #[inline]
 pub(super) fn uv64(c: [f32; 2]) -> [f64; 2] {
@@ -81,9 +86,8 @@ pub(super) fn face_geometry(mesh: &TriangleMesh, corner_uvs: &[[[f32; 2]; 3]]) -
             nan_max(ds1.hypot(dt1), ds2.hypot(dt2)),
             (s2 - s1).hypot(t2 - t1),
         );
-        // `!(x > y)` so that NaN is degenerate, as the evaluator's `~(|A| > tol)`.
-        let deg2 = !(a2.abs() > DEGENERATE_RELATIVE * lmax2 * lmax2);
-        let deg3 = !(a3 > DEGENERATE_RELATIVE * lmax3 * lmax3);
+        let deg2 = not_greater(a2.abs(), DEGENERATE_RELATIVE * lmax2 * lmax2);
+        let deg3 = not_greater(a3, DEGENERATE_RELATIVE * lmax3 * lmax3);
         g.area_3d_m2.push(a3);
         g.signed_uv_area.push(a2);
         g.uv_degenerate.push(deg2);

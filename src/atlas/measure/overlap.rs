@@ -13,11 +13,14 @@
 //! Acceleration: per page, a uniform grid of about one cell per face over the faces' UV box;
 //! each face is entered in the cells its bounding box meets (the grid is coarsened while that
 //! exceeds 8 entries per face), and a pair is tested only in the lowest cell common to both
-//! boxes, after a strict bounding-box test, so each pair is tested once. Reference: Shewchuk,
+//! boxes, after a strict bounding-box test, so each pair is tested once. Rows of cells are
+//! counted in parallel (rayon) in fixed batches merged in order, so the result — including
+//! where counting stops at the cap — does not depend on the thread count. Reference: Shewchuk,
 //! "Adaptive Precision Floating-Point Arithmetic and Fast Robust Geometric Predicates", 1997.
 //!
 //! Cost: `O(faces + candidate pairs)`; on a packed atlas about 3–6 candidates per face (mostly
 //! edge neighbours, rejected by their shared edge after 2–3 predicates).
+use rayon::prelude::*;
 use robust::{orient2d, Coord};
 
 use super::{ExactOverlap, EXACT_OVERLAP_EXAMPLES, EXACT_OVERLAP_PAIRS_MAX};
@@ -62,13 +65,26 @@ pub(super) fn ccw_triangle(uv: &[[f32; 2]; 3]) -> Option<Tri> {
     Some(t)
 }
 
-struct Candidate {
-    face: u32,
-    tri: Tri,
+/// One grid entry: a face's UV box (exact: `f32` corners) and lowest cell, 24 bytes, stored
+/// contiguously per cell so that the candidate loop streams through memory.
+#[derive(Clone, Copy)]
+struct Entry {
     /// `[u_min, v_min, u_max, v_max]`.
-    bbox: [f64; 4],
-    /// Cell range `[cx0, cy0, cx1, cy1]`, inclusive.
-    cells: [u32; 4],
+    bbox: [f32; 4],
+    /// Lowest cell `[cx, cy]` the box meets.
+    lo: [u16; 2],
+    /// Index into the page's candidates.
+    cand: u32,
+}
+
+/// Rows of cells per parallel batch; the pair cap is checked between batches (deterministic).
+const ROWS_PER_BATCH: u32 = 32;
+
+#[derive(Default)]
+struct Counts {
+    pairs: u64,
+    same_chart: u64,
+    examples: Vec<[FaceId; 2]>,
 }
 
 /// Counts exact overlap pairs over all pages.
@@ -79,75 +95,93 @@ pub(super) fn exact_overlaps(
     chart_of_face: &[u32],
 ) -> ExactOverlap {
     let mut out = ExactOverlap::default();
-    let mut per_page: Vec<Vec<Candidate>> = (0..num_pages).map(|_| Vec::new()).collect();
-    for (f, uv) in corner_uvs.iter().enumerate() {
-        if let Some(tri) = ccw_triangle(uv) {
-            let us = [tri[0][0], tri[1][0], tri[2][0]];
-            let vs = [tri[0][1], tri[1][1], tri[2][1]];
-            let bbox = [
+    let mut per_page: Vec<Vec<u32>> = (0..num_pages).map(|_| Vec::new()).collect();
+    for (f, &p) in face_page.iter().enumerate() {
+        per_page[p as usize].push(f as u32);
+    }
+    for faces in &per_page {
+        if out.truncated {
+            break;
+        }
+        count_page(corner_uvs, faces, chart_of_face, &mut out);
+    }
+    out.pairs_cross_chart = out.pairs - out.pairs_same_chart;
+    out.examples.sort_unstable();
+    out.examples.truncate(EXACT_OVERLAP_EXAMPLES);
+    out
+}
+
+fn count_page(
+    corner_uvs: &[[[f32; 2]; 3]],
+    faces: &[u32],
+    chart_of_face: &[u32],
+    out: &mut ExactOverlap,
+) {
+    let mut face = Vec::new();
+    let mut tris = Vec::new();
+    let mut boxes = Vec::new();
+    for &f in faces {
+        let uv = &corner_uvs[f as usize];
+        if let Some(t) = ccw_triangle(uv) {
+            face.push(f);
+            tris.push(t);
+            let (us, vs) = (
+                [uv[0][0], uv[1][0], uv[2][0]],
+                [uv[0][1], uv[1][1], uv[2][1]],
+            );
+            boxes.push([
                 us[0].min(us[1]).min(us[2]),
                 vs[0].min(vs[1]).min(vs[2]),
                 us[0].max(us[1]).max(us[2]),
                 vs[0].max(vs[1]).max(vs[2]),
-            ];
-            per_page[face_page[f] as usize].push(Candidate {
-                face: f as u32,
-                tri,
-                bbox,
-                cells: [0; 4],
-            });
+            ]);
         }
     }
-    for cands in &mut per_page {
-        if out.truncated {
-            break;
-        }
-        count_page(cands, chart_of_face, &mut out);
-    }
-    out.examples.sort_unstable();
-    out
-}
-
-fn count_page(cands: &mut [Candidate], chart_of_face: &[u32], out: &mut ExactOverlap) {
-    let n = cands.len();
+    let n = tris.len();
     if n < 2 {
         return;
     }
     let mut dom = [
-        f64::INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::NEG_INFINITY,
+        f32::INFINITY,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NEG_INFINITY,
     ];
-    for c in cands.iter() {
+    for b in &boxes {
         dom = [
-            dom[0].min(c.bbox[0]),
-            dom[1].min(c.bbox[1]),
-            dom[2].max(c.bbox[2]),
-            dom[3].max(c.bbox[3]),
+            dom[0].min(b[0]),
+            dom[1].min(b[1]),
+            dom[2].max(b[2]),
+            dom[3].max(b[3]),
         ];
     }
+    let dom = dom.map(f64::from);
     // Cell of a coordinate: monotone in the coordinate, so overlapping boxes share a cell.
-    let cell_of = |x: f64, lo: f64, hi: f64, g: u32| -> u32 {
+    let cell_of = |x: f32, lo: f64, hi: f64, g: u32| -> u32 {
         if hi <= lo {
             return 0;
         }
-        let c = ((x - lo) / (hi - lo) * f64::from(g)).floor();
+        let c = ((f64::from(x) - lo) / (hi - lo) * f64::from(g)).floor();
         (c.max(0.0) as u32).min(g - 1)
     };
+    let range_of = |b: &[f32; 4], g: u32| -> [u32; 4] {
+        [
+            cell_of(b[0], dom[0], dom[2], g),
+            cell_of(b[1], dom[1], dom[3], g),
+            cell_of(b[2], dom[0], dom[2], g),
+            cell_of(b[3], dom[1], dom[3], g),
+        ]
+    };
+    // About one cell per face; coarser while boxes would make more than 8 entries per face.
     let mut g = ((n as f64).sqrt().ceil() as u32).clamp(1, 2048);
     loop {
-        let mut entries = 0u64;
-        for c in cands.iter_mut() {
-            c.cells = [
-                cell_of(c.bbox[0], dom[0], dom[2], g),
-                cell_of(c.bbox[1], dom[1], dom[3], g),
-                cell_of(c.bbox[2], dom[0], dom[2], g),
-                cell_of(c.bbox[3], dom[1], dom[3], g),
-            ];
-            entries +=
-                u64::from(c.cells[2] - c.cells[0] + 1) * u64::from(c.cells[3] - c.cells[1] + 1);
-        }
+        let entries: u64 = boxes
+            .iter()
+            .map(|b| {
+                let r = range_of(b, g);
+                u64::from(r[2] - r[0] + 1) * u64::from(r[3] - r[1] + 1)
+            })
+            .sum();
         if entries <= 8 * n as u64 + 64 || g == 1 {
             break;
         }
@@ -155,10 +189,11 @@ fn count_page(cands: &mut [Candidate], chart_of_face: &[u32], out: &mut ExactOve
     }
     // Cell lists (CSR), cells row-major (y then x).
     let num_cells = (g as usize) * (g as usize);
+    let ranges: Vec<[u32; 4]> = boxes.iter().map(|b| range_of(b, g)).collect();
     let mut start = vec![0u32; num_cells + 1];
-    for c in cands.iter() {
-        for cy in c.cells[1]..=c.cells[3] {
-            for cx in c.cells[0]..=c.cells[2] {
+    for r in &ranges {
+        for cy in r[1]..=r[3] {
+            for cx in r[0]..=r[2] {
                 start[(cy * g + cx) as usize + 1] += 1;
             }
         }
@@ -167,55 +202,82 @@ fn count_page(cands: &mut [Candidate], chart_of_face: &[u32], out: &mut ExactOve
         start[i + 1] += start[i];
     }
     let mut next = start.clone();
-    let mut members = vec![0u32; start[num_cells] as usize];
-    for (i, c) in cands.iter().enumerate() {
-        for cy in c.cells[1]..=c.cells[3] {
-            for cx in c.cells[0]..=c.cells[2] {
+    let empty = Entry {
+        bbox: [0.0; 4],
+        lo: [0; 2],
+        cand: 0,
+    };
+    let mut entries = vec![empty; start[num_cells] as usize];
+    for (i, r) in ranges.iter().enumerate() {
+        let e = Entry {
+            bbox: boxes[i],
+            lo: [r[0] as u16, r[1] as u16],
+            cand: i as u32,
+        };
+        for cy in r[1]..=r[3] {
+            for cx in r[0]..=r[2] {
                 let cell = (cy * g + cx) as usize;
-                members[next[cell] as usize] = i as u32;
+                entries[next[cell] as usize] = e;
                 next[cell] += 1;
             }
         }
     }
-    for cy in 0..g {
-        for cx in 0..g {
-            let cell = (cy * g + cx) as usize;
-            let list = &members[start[cell] as usize..start[cell + 1] as usize];
-            for (ia, &a) in list.iter().enumerate() {
-                let ca = &cands[a as usize];
-                for &b in &list[ia + 1..] {
-                    let cb = &cands[b as usize];
-                    // Strict box overlap is necessary for intersecting interiors.
-                    if !(ca.bbox[0] < cb.bbox[2]
-                        && cb.bbox[0] < ca.bbox[2]
-                        && ca.bbox[1] < cb.bbox[3]
-                        && cb.bbox[1] < ca.bbox[3])
-                    {
-                        continue;
-                    }
-                    // Test each pair once: in the lowest cell both boxes meet.
-                    if ca.cells[0].max(cb.cells[0]) != cx || ca.cells[1].max(cb.cells[1]) != cy {
-                        continue;
-                    }
-                    if !interiors_intersect(&ca.tri, &cb.tri) {
-                        continue;
-                    }
-                    out.pairs += 1;
-                    if chart_of_face[ca.face as usize] == chart_of_face[cb.face as usize] {
-                        out.pairs_same_chart += 1;
-                    } else {
-                        out.pairs_cross_chart += 1;
-                    }
-                    if out.examples.len() < EXACT_OVERLAP_EXAMPLES {
-                        let (lo, hi) = (ca.face.min(cb.face), ca.face.max(cb.face));
-                        out.examples.push([FaceId(lo), FaceId(hi)]);
-                    }
-                    if out.pairs >= EXACT_OVERLAP_PAIRS_MAX {
-                        out.truncated = true;
-                        return;
+    drop((next, ranges, boxes));
+
+    let count_rows = |rows: std::ops::Range<u32>| -> Counts {
+        let mut c = Counts::default();
+        for cy in rows {
+            for cx in 0..g {
+                let cell = (cy * g + cx) as usize;
+                let list = &entries[start[cell] as usize..start[cell + 1] as usize];
+                for (ia, ea) in list.iter().enumerate() {
+                    for eb in &list[ia + 1..] {
+                        // Test each pair once: in the lowest cell both boxes meet.
+                        if u32::from(ea.lo[0].max(eb.lo[0])) != cx
+                            || u32::from(ea.lo[1].max(eb.lo[1])) != cy
+                        {
+                            continue;
+                        }
+                        // Strict box overlap is necessary for intersecting interiors.
+                        let (a, b) = (&ea.bbox, &eb.bbox);
+                        if !(a[0] < b[2] && b[0] < a[2] && a[1] < b[3] && b[1] < a[3]) {
+                            continue;
+                        }
+                        let (ta, tb) = (ea.cand as usize, eb.cand as usize);
+                        if !interiors_intersect(&tris[ta], &tris[tb]) {
+                            continue;
+                        }
+                        let (fa, fb) = (face[ta], face[tb]);
+                        c.pairs += 1;
+                        c.same_chart +=
+                            u64::from(chart_of_face[fa as usize] == chart_of_face[fb as usize]);
+                        if c.examples.len() < EXACT_OVERLAP_EXAMPLES {
+                            c.examples.push([FaceId(fa.min(fb)), FaceId(fa.max(fb))]);
+                        }
                     }
                 }
             }
+        }
+        c
+    };
+    // Parallel over batches of cell rows, merged in row order: deterministic whatever the
+    // thread count, and the cap is applied between batches of batches.
+    let batches: Vec<u32> = (0..g).step_by(ROWS_PER_BATCH as usize).collect();
+    for group in batches.chunks(64) {
+        let counts: Vec<Counts> = group
+            .par_iter()
+            .map(|&r0| count_rows(r0..(r0 + ROWS_PER_BATCH).min(g)))
+            .collect();
+        for c in counts {
+            out.pairs += c.pairs;
+            out.pairs_same_chart += c.same_chart;
+            if out.examples.len() < EXACT_OVERLAP_EXAMPLES {
+                out.examples.extend(c.examples);
+            }
+        }
+        if out.pairs >= EXACT_OVERLAP_PAIRS_MAX {
+            out.truncated = true;
+            return;
         }
     }
 }

@@ -10,31 +10,13 @@
 //!
 //! Units: stretch and ratios dimensionless; angles in degrees (`_deg`, as the evaluator).
 //! Cost: one pass over the faces plus three sorts of the used faces' values (percentiles).
-use super::geometry::{dot3, sub3, uv64, FaceGeometry};
+use super::geometry::{sub3, uv64, FaceGeometry};
+use super::numpy::{
+    dot3_einsum, np_mean, np_mean_weighted, np_sum, percentile_linear, percentile_weighted,
+    stable_order,
+};
 use super::{finite, AngleDistortion, AreaDistortion, StretchReport, TexelDensityReport};
 use crate::mesh::{FaceId, TriangleMesh};
-
-/// Neumaier-compensated sum: long sums agree with numpy's pairwise sums to ~1e-16 relative.
-#[derive(Debug, Clone, Copy, Default)]
-pub(super) struct Sum {
-    sum: f64,
-    compensation: f64,
-}
-
-impl Sum {
-    pub(super) fn add(&mut self, x: f64) {
-        let t = self.sum + x;
-        if self.sum.abs() >= x.abs() {
-            self.compensation += (self.sum - t) + x;
-        } else {
-            self.compensation += (x - t) + self.sum;
-        }
-        self.sum = t;
-    }
-    pub(super) fn value(&self) -> f64 {
-        self.sum + self.compensation
-    }
-}
 
 /// Per-chart stretch figures (global `k`).
 #[derive(Debug, Clone, Default)]
@@ -54,82 +36,6 @@ pub(super) struct StretchResult {
     pub per_chart: Vec<ChartStretch>,
 }
 
-/// numpy `percentile(x, q)` with the default linear method; `sorted` ascending.
-pub(super) fn percentile_linear(sorted: &[f64], q: f64) -> Option<f64> {
-    let n = sorted.len();
-    if n == 0 {
-        return None;
-    }
-    let quantile = q / 100.0;
-    // numpy's `_compute_virtual_index` with alpha = beta = 1.
-    let virtual_index = n as f64 * quantile + (1.0 + quantile * -1.0) - 1.0;
-    let below = virtual_index.floor().clamp(0.0, (n - 1) as f64);
-    let gamma = virtual_index - below;
-    let i = below as usize;
-    let (a, b) = (sorted[i], sorted[(i + 1).min(n - 1)]);
-    // numpy's `_lerp`: exact at both ends.
-    let diff = b - a;
-    let x = if gamma >= 0.5 {
-        b - diff * (1.0 - gamma)
-    } else {
-        a + diff * gamma
-    };
-    finite(x)
-}
-
-/// The evaluator's weighted percentile: inverted CDF over `order` (indices of `x` stably
-/// sorted ascending), weights `w`.
-pub(super) fn percentile_weighted(x: &[f64], w: &[f64], order: &[u32], q: f64) -> Option<f64> {
-    if order.is_empty() {
-        return None;
-    }
-    let total = order.iter().fold(0.0, |s, &i| s + w[i as usize]);
-    if total <= 0.0 || total.is_nan() {
-        return None;
-    }
-    let target = q / 100.0 * total;
-    let mut cum = 0.0;
-    let mut k = order.len() - 1;
-    for (j, &i) in order.iter().enumerate() {
-        cum += w[i as usize];
-        if cum >= target {
-            k = j;
-            break;
-        }
-    }
-    finite(x[order[k] as usize])
-}
-
-/// Indices of `x` stably sorted ascending.
-pub(super) fn stable_order(x: &[f64]) -> Vec<u32> {
-    let mut o: Vec<u32> = (0..x.len() as u32).collect();
-    o.sort_by(|&a, &b| x[a as usize].total_cmp(&x[b as usize]));
-    o
-}
-
-fn mean(x: &[f64]) -> Option<f64> {
-    if x.is_empty() {
-        return None;
-    }
-    let mut s = Sum::default();
-    x.iter().for_each(|&v| s.add(v));
-    finite(s.value() / x.len() as f64)
-}
-
-fn mean_weighted(x: &[f64], w: &[f64]) -> Option<f64> {
-    if x.is_empty() {
-        return None;
-    }
-    let (mut sxw, mut sw) = (Sum::default(), Sum::default());
-    for (&v, &wi) in x.iter().zip(w) {
-        sxw.add(v * wi);
-        sw.add(wi);
-    }
-    (sw.value() > 0.0)
-        .then(|| sxw.value() / sw.value())
-        .and_then(finite)
-}
-
 /// The stretch, distortion and density figures. `page_texels_area` = `W · H`.
 pub(super) fn stretch(
     mesh: &TriangleMesh,
@@ -143,11 +49,14 @@ pub(super) fn stretch(
     let used: Vec<bool> = (0..nf)
         .map(|f| !geo.uv_degenerate[f] && !geo.degenerate_3d[f])
         .collect();
-    let (mut sa2, mut sa3) = (Sum::default(), Sum::default());
-    for f in (0..nf).filter(|&f| used[f]) {
-        sa2.add(geo.signed_uv_area[f].abs());
-        sa3.add(geo.area_3d_m2[f]);
-    }
+    let used_a2: Vec<f64> = (0..nf)
+        .filter(|&f| used[f])
+        .map(|f| geo.signed_uv_area[f].abs())
+        .collect();
+    let used_a3: Vec<f64> = (0..nf)
+        .filter(|&f| used[f])
+        .map(|f| geo.area_3d_m2[f])
+        .collect();
     let num_used = used.iter().filter(|&&u| u).count();
     let excluded_uv = (0..nf)
         .filter(|&f| geo.uv_degenerate[f] && !geo.degenerate_3d[f])
@@ -169,14 +78,14 @@ pub(super) fn stretch(
             per_chart,
         };
     }
-    let k = sa2.value() / sa3.value();
+    let k = np_sum(&used_a2) / np_sum(&used_a3);
     report.uv_area_over_3d_area = finite(k);
 
     let mut dev = Vec::with_capacity(num_used);
     let mut conf = Vec::with_capacity(num_used);
     let mut ratio = Vec::with_capacity(num_used);
     let mut weight = Vec::with_capacity(num_used);
-    let (mut l2_num, mut l2_den) = (Sum::default(), Sum::default());
+    let mut l2_terms = Vec::with_capacity(num_used);
     let (mut max_gamma, mut max_inv_gamma) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
     // Per chart: Σ (a+c)/2·A3 and max(Γ, 1/γ); plain sequential sums (as numpy's bincount).
     let mut chart_l2_num = vec![0.0f64; num_charts];
@@ -197,9 +106,9 @@ pub(super) fn stretch(
         let two_a2 = 2.0 * a2;
         let ss: [f64; 3] = std::array::from_fn(|i| (e1[i] * dt2 - e2[i] * dt1) / two_a2);
         let st: [f64; 3] = std::array::from_fn(|i| (-e1[i] * ds2 + e2[i] * ds1) / two_a2);
-        let a = dot3(ss, ss) * k;
-        let b = dot3(ss, st) * k;
-        let c = dot3(st, st) * k;
+        let a = dot3_einsum(ss, ss) * k;
+        let b = dot3_einsum(ss, st) * k;
+        let c = dot3_einsum(st, st) * k;
         let root = ((a - c) * (a - c) + 4.0 * b * b).sqrt();
         let big = (0.5 * ((a + c) + root)).sqrt();
         let small = (0.5 * ((a + c) - root)).max(0.0).sqrt();
@@ -209,8 +118,7 @@ pub(super) fn stretch(
             f64::INFINITY
         };
         let term = (a + c) / 2.0 * a3;
-        l2_num.add(term);
-        l2_den.add(a3);
+        l2_terms.push(term);
         max_gamma = max_gamma.max(big);
         max_inv_gamma = max_inv_gamma.max(inv_small);
         let cos = (b / (a * c).sqrt()).clamp(-1.0, 1.0);
@@ -229,7 +137,7 @@ pub(super) fn stretch(
         chart_a2[ch] += a2.abs();
         chart_linf[ch] = chart_linf[ch].max(big.max(inv_small));
     }
-    report.l2 = finite((l2_num.value() / l2_den.value()).sqrt());
+    report.l2 = finite((np_sum(&l2_terms) / np_sum(&used_a3)).sqrt());
     report.linf = finite(max_gamma.max(max_inv_gamma));
     report.linf_sander = finite(max_gamma);
 
@@ -245,13 +153,13 @@ pub(super) fn stretch(
         .map(|(&c, &w)| (c, w))
         .unzip();
     let angle = AngleDistortion {
-        angle_deviation_deg_mean: mean(&dev),
+        angle_deviation_deg_mean: np_mean(&dev),
         angle_deviation_deg_p95: percentile_linear(&dev_sorted, 95.0),
-        angle_deviation_deg_mean_aw: mean_weighted(&dev, &weight),
+        angle_deviation_deg_mean_aw: np_mean_weighted(&dev, &weight),
         angle_deviation_deg_p95_aw: percentile_weighted(&dev, &weight, &dev_order, 95.0),
-        conformal_ratio_mean: mean(&conf_finite),
+        conformal_ratio_mean: np_mean(&conf_finite),
         conformal_ratio_p95: percentile_linear(&conf_sorted, 95.0),
-        conformal_ratio_mean_aw: mean_weighted(&conf_finite, &w_finite),
+        conformal_ratio_mean_aw: np_mean_weighted(&conf_finite, &w_finite),
         conformal_ratio_p95_aw: percentile_weighted(&conf, &weight, &conf_order, 95.0),
     };
     // Area distortion.
@@ -283,11 +191,11 @@ pub(super) fn stretch(
     let density = (!dens.is_empty()).then(|| {
         let min = dens.iter().copied().fold(f64::INFINITY, f64::min);
         let max = dens.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let mu = mean(&dens).unwrap_or(f64::NAN);
+        let mu = np_mean(&dens).unwrap_or(f64::NAN);
         let var: Vec<f64> = dens.iter().map(|&d| (d - mu) * (d - mu)).collect();
-        let std = mean(&var).unwrap_or(f64::NAN).sqrt();
-        let mu_w = mean_weighted(&dens, &dens_w).unwrap_or(f64::NAN);
-        let var_w = mean_weighted(&var_about(&dens, mu_w), &dens_w).unwrap_or(f64::NAN);
+        let std = np_mean(&var).unwrap_or(f64::NAN).sqrt();
+        let mu_w = np_mean_weighted(&dens, &dens_w).unwrap_or(f64::NAN);
+        let var_w = np_mean_weighted(&var_about(&dens, mu_w), &dens_w).unwrap_or(f64::NAN);
         TexelDensityReport {
             charts_measured: dens.len(),
             min,

@@ -1,5 +1,5 @@
 //! Hand-computed cases for `measure_atlas`: each states its input and the exact expected values.
-use super::stretch::{percentile_linear, percentile_weighted, stable_order};
+use super::numpy::{np_sum, percentile_linear, percentile_weighted, stable_order};
 use super::*;
 use crate::mesh::MeshInput;
 
@@ -89,12 +89,12 @@ fn isometric_right_triangle_has_unit_stretch() {
 
 #[test]
 fn anisotropic_scale_has_the_analytic_stretch() {
-    // u = 0.8 x, v = 0.2 y: k = 0.16; dq/ds = 1.25, dq/dt = 5, normalised a = 0.25, c = 4,
+    // u = 0.5 x, v = 0.125 y: k = 1/16; dq/ds = 2, dq/dt = 8, normalised a = 0.25, c = 4,
     // so Γ = 2, γ = 0.5: L2 = sqrt((a + c)/2) = sqrt(2.125), L∞ = max(Γ, 1/γ) = 2,
     // conformal ratio 4, angle deviation 0, area ratio 1 everywhere.
-    let c = case(&SQUARE, &SQUARE_TRIS, &square_uvs([0.0, 0.0], [0.8, 0.2]));
+    let c = case(&SQUARE, &SQUARE_TRIS, &square_uvs([0.0, 0.0], [0.5, 0.125]));
     let r = measure(&c, [64, 64], 0, 1);
-    assert!(close(r.stretch.uv_area_over_3d_area, 0.16));
+    assert!(close(r.stretch.uv_area_over_3d_area, 0.0625));
     assert!(close(r.stretch.l2, 2.125f64.sqrt()), "{:?}", r.stretch);
     assert!(close(r.stretch.linf, 2.0));
     assert!(close(r.stretch.linf_sander, 2.0));
@@ -307,4 +307,15 @@ fn percentiles_follow_numpy() {
     assert_eq!(percentile_weighted(&x, &w, &o, 50.0), Some(2.0));
     assert_eq!(percentile_weighted(&x, &w, &o, 51.0), Some(3.0));
     assert_eq!(percentile_weighted(&x, &w, &o, 5.0), Some(1.0));
+}
+
+#[test]
+fn pairwise_sum_matches_numpy() {
+    // numpy 2.x: np.sum(np.full(1000, 0.1)) == 100.00000000000001; a sequential sum gives
+    // 99.9999999999986.
+    let x = vec![0.1f64; 1000];
+    assert_eq!(np_sum(&x), 100.000_000_000_000_01);
+    assert_eq!(x.iter().fold(0.0, |s, &v| s + v), 99.999_999_999_998_6);
+    assert_eq!(np_sum(&[1.0, 2.0, 3.0]), 6.0);
+    assert_eq!(np_sum(&[]), 0.0);
 }
