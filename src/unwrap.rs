@@ -115,9 +115,10 @@ pub fn unwrap_asset(
     let atlas = atlas::generate(&built.mesh, &settings.atlas, &mut timed)?;
     let stages_s = timed.stages_s;
     let t = Instant::now();
-    let encoded = gltf_io::encode(
+    let encoded = gltf_io::encode_pages(
         asset,
         &atlas.corner_uvs,
+        &atlas.face_page,
         &EncodeOptions {
             uv_target: settings.uv_target,
             format: settings.format,

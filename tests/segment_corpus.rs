@@ -2,8 +2,10 @@
 //! when `../shared/corpus` exists; unset, the test prints that it skipped). For every mesh:
 //! every chart is a disk and every face is in exactly one chart, after segmentation and again
 //! after validation (§3.3); the validated maps have 0 flipped faces and no chart is left with
-//! a flip or a UV boundary overlap. Prints per mesh the chart count, the time and the largest
-//! chart in faces. The 1M-triangle mesh is left out unless `TEXATLAS_CORPUS_ALL` is set (it
+//! a flip or a UV boundary overlap; every chart has a map whose vertex list is its `chart_mesh`
+//! vertex list. Prints per mesh the chart count, the time, the largest chart in faces and the
+//! global Sander L2 stretch of the validated maps (each chart scaled to UV area = 3-D area, as
+//! the packer does). The 1M-triangle mesh is left out unless `TEXATLAS_CORPUS_ALL` is set (it
 //! takes minutes in a debug build).
 //!
 //! Run by hand: `TEXATLAS_CORPUS_DIR=../shared/corpus cargo test --test segment_corpus -- --nocapture`.
@@ -11,8 +13,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use texatlas::atlas::segment::{
-    check_chart_is_disk, segment_charts, validate_charts, ChartDefect, SegmentOptions,
-    ValidateOptions,
+    chart_mesh, check_chart_is_disk, segment_charts, validate_charts, ChartDefect, SegmentOptions,
+    ValidateOptions, ValidatedCharts,
 };
 use texatlas::gltf_io::{decode, DecodeLimits, Resources};
 use texatlas::mesh::TriangleMesh;
@@ -85,13 +87,28 @@ fn segment_every_corpus_mesh() {
                 .map(|(m, _)| m.flipped_faces.len())
                 .sum();
             println!(
-                "  validated: charts {:5} largest {:7} time {ms:8.1} ms splits(flip,overlap,area) {:?} merges {} unresolved {} flips {flips}",
+                "  validated: charts {:5} largest {:7} time {ms:8.1} ms splits(flip,overlap,area) {:?} degenerate splits {} faces {} merges {} unresolved {} flips {flips} L2 {:.4}",
                 v.segmentation.num_charts(),
                 largest,
                 v.splits,
+                v.degenerate_splits,
+                v.degenerate_faces,
                 v.merges,
-                v.unresolved.len()
+                v.unresolved.len(),
+                l2_stretch(&mesh, &v)
             );
+            for (i, (c, m)) in v.segmentation.charts.iter().zip(&v.maps).enumerate() {
+                match m {
+                    None => failures.push(format!("{name}: validated chart {i} has no map")),
+                    Some((map, global)) => {
+                        if *global != chart_mesh(&mesh, c).1 || map.uv.len() != global.len() {
+                            failures.push(format!(
+                                "{name}: validated chart {i}: the map's vertices are not the chart's"
+                            ));
+                        }
+                    }
+                }
+            }
             let mut kinds: std::collections::BTreeMap<String, usize> = Default::default();
             for (_, d) in &v.unresolved {
                 let k = format!("{d:?}");
@@ -132,4 +149,63 @@ fn segment_every_corpus_mesh() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Global Sander L2 stretch (Sander et al. 2001) of the validated maps, each chart scaled so that
+/// its UV area equals its 3-D area: `sqrt(Σ_T A3·(a+c)/2 / Σ_T A3)` over non-degenerate faces,
+/// with `a`, `c` the squared lengths of the 3-D derivatives along u and v.
+fn l2_stretch(mesh: &TriangleMesh, v: &ValidatedCharts) -> f64 {
+    let (mut num, mut den) = (0.0f64, 0.0f64);
+    for (c, m) in v.segmentation.charts.iter().zip(&v.maps) {
+        let Some((map, _)) = m else { continue };
+        let (cm, _) = chart_mesh(mesh, c);
+        let mut faces = Vec::new();
+        let (mut a3_sum, mut auv_sum) = (0.0f64, 0.0f64);
+        for t in &cm.triangles {
+            let q = t.map(|i| cm.positions_m[i as usize]);
+            let p = t.map(|i| map.uv[i as usize]);
+            let e1 = [0, 1, 2].map(|k| q[1][k] - q[0][k]);
+            let e2 = [0, 1, 2].map(|k| q[2][k] - q[0][k]);
+            let cr = [
+                e1[1] * e2[2] - e1[2] * e2[1],
+                e1[2] * e2[0] - e1[0] * e2[2],
+                e1[0] * e2[1] - e1[1] * e2[0],
+            ];
+            let a3 = 0.5 * (cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]).sqrt();
+            let auv = 0.5
+                * ((p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
+                    - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]));
+            if !(a3 > 0.0 && auv > 0.0) {
+                continue;
+            }
+            let (s, t) = (p.map(|x| x[0]), p.map(|x| x[1]));
+            let ss = [0, 1, 2].map(|k| {
+                (q[0][k] * (t[1] - t[2]) + q[1][k] * (t[2] - t[0]) + q[2][k] * (t[0] - t[1]))
+                    / (2.0 * auv)
+            });
+            let st = [0, 1, 2].map(|k| {
+                (q[0][k] * (s[2] - s[1]) + q[1][k] * (s[0] - s[2]) + q[2][k] * (s[1] - s[0]))
+                    / (2.0 * auv)
+            });
+            let a = ss.iter().map(|x| x * x).sum::<f64>();
+            let cc = st.iter().map(|x| x * x).sum::<f64>();
+            faces.push((a3, 0.5 * (a + cc)));
+            a3_sum += a3;
+            auv_sum += auv;
+        }
+        if a3_sum <= 0.0 {
+            continue;
+        }
+        // Scaling UV by k (k² = A3/Auv) divides a and c by k².
+        let inv_k2 = auv_sum / a3_sum;
+        for (a3, l2sq) in faces {
+            num += a3 * l2sq * inv_k2;
+            den += a3;
+        }
+    }
+    if den > 0.0 {
+        (num / den).sqrt()
+    } else {
+        1.0
+    }
 }

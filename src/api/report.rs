@@ -5,7 +5,7 @@
 use serde::Serialize;
 
 use crate::api::OptionsJson;
-use crate::atlas::{Atlas, Stage};
+use crate::atlas::{Atlas, AtlasReport, Stage};
 use crate::gltf_io::{Asset, EncodedAsset};
 use crate::mesh::BuiltMesh;
 use crate::unwrap::StepTimings;
@@ -62,7 +62,8 @@ pub struct PageJson {
     pub charts: usize,
     /// Triangles on the page.
     pub triangles: usize,
-    /// The primitives (output indices) holding this page's triangles.
+    /// The primitives of the output document holding this page's triangles (a primitive whose
+    /// charts land on several pages is split into one primitive per page, same material).
     pub primitives: Vec<PrimitiveRefJson>,
 }
 
@@ -145,25 +146,14 @@ impl ReportJson {
                 primitives: Vec::new(),
             })
             .collect();
-        for prim in asset.triangle_primitives() {
-            let mut per_page = vec![0usize; atlas.num_pages as usize];
-            for f in prim.faces.clone() {
-                if let Some(n) = atlas
-                    .face_page
-                    .get(f)
-                    .and_then(|&p| per_page.get_mut(p as usize))
-                {
-                    *n += 1;
-                }
-            }
-            for (page, &n) in per_page.iter().enumerate() {
-                if n > 0 {
-                    pages[page].primitives.push(PrimitiveRefJson {
-                        mesh: prim.mesh_index,
-                        primitive: prim.primitive_index,
-                        triangles: n,
-                    });
-                }
+        // Where each page's triangles went in the output (a primitive spanning pages is split).
+        for part in &encoded.parts {
+            if let Some(p) = pages.get_mut(part.page as usize) {
+                p.primitives.push(PrimitiveRefJson {
+                    mesh: part.mesh_index,
+                    primitive: part.primitive_index,
+                    triangles: part.faces,
+                });
             }
         }
         let s = &atlas.stats;
@@ -206,12 +196,295 @@ impl ReportJson {
     }
 }
 
-/// The measured quality (mirrors [`crate::atlas::AtlasReport`]).
+/// The measured quality: [`AtlasReport`] on the wire. Names follow the independent evaluator's
+/// keys (`../shared/eval/atlas_eval.py`) where it has them; `null` means undefined or
+/// non-finite, as there.
 #[derive(Debug, Clone, Serialize)]
-pub struct QualityJson {}
+pub struct QualityJson {
+    /// Faces measured, degenerate ones included.
+    pub triangles: usize,
+    /// Distinct (glTF mesh, position, page, UV) corners.
+    pub unique_corners: usize,
+    /// Σ 3-D area of non-degenerate faces, model units².
+    pub area_3d_m2: f64,
+    /// Σ |UV area| of non-degenerate faces, page units (a page is 1).
+    pub uv_area: f64,
+    /// UV-degenerate faces.
+    pub degenerate: usize,
+    /// 3-D-degenerate faces.
+    pub degenerate_3d: usize,
+    /// UV-degenerate faces with 3-D area (strictly infinite stretch).
+    pub degenerate_uv_with_3d_area: usize,
+    /// Charts, recomputed from the written UVs.
+    pub charts: usize,
+    /// Distinct cut 3-D edges.
+    pub seam_edges: usize,
+    /// Total 3-D length of the cut edges, model units.
+    pub seam_length_3d_m: f64,
+    /// Seam length / sqrt(3-D area).
+    pub seam_edge_ratio: Option<f64>,
+    /// All chart-boundary length (seams once per side, open borders) / sqrt(3-D area).
+    pub boundary_edge_ratio: Option<f64>,
+    /// 3-D length of the mesh's own open borders, model units.
+    pub open_border_length_3d_m: f64,
+    /// Sander stretch.
+    pub stretch: StretchJson,
+    /// Angle distortion (`null` without a measurable face).
+    pub angle_distortion: Option<AngleDistortionJson>,
+    /// Area distortion (`null` without a measurable face).
+    pub area_distortion: Option<AreaDistortionJson>,
+    /// Faces whose UV orientation differs from their chart's.
+    pub flipped: usize,
+    /// Mirrored charts (orientation opposite to the atlas majority; not flips).
+    pub charts_minority_orientation: usize,
+    /// Corners outside [0,1] (1e-6 tolerance).
+    pub out_of_range_corners: usize,
+    /// Faces with such a corner.
+    pub out_of_range_triangles: usize,
+    /// `[u_min, v_min, u_max, v_max]`, pages overlaid.
+    pub uv_bbox: Option<[f64; 4]>,
+    /// UV area / page area (all pages).
+    pub packing_efficiency: f64,
+    /// UV area / area of the used UV bounding box.
+    pub packing_efficiency_bbox: Option<f64>,
+    /// Covered texel centres / all page texels.
+    pub texel_utilization: f64,
+    /// Overlaps: exact and sampled.
+    pub overlap: OverlapJson,
+    /// Padding violations.
+    pub padding: PaddingJson,
+    /// Texel density across charts.
+    pub texel_density: Option<TexelDensityJson>,
+    /// Per chart: faces, page, areas, stretch, density.
+    pub per_chart: Vec<ChartQualityJson>,
+}
 
-impl From<&crate::atlas::AtlasReport> for QualityJson {
-    fn from(_: &crate::atlas::AtlasReport) -> Self {
-        QualityJson {}
+/// Sander stretch; see [`crate::atlas::measure::StretchReport`].
+#[derive(Debug, Clone, Serialize)]
+pub struct StretchJson {
+    /// L2 stretch (≥ 1, 1 ideal), global normalisation.
+    pub l2: Option<f64>,
+    /// Symmetric L∞ stretch `max max(Γ, 1/γ)`.
+    pub linf: Option<f64>,
+    /// Sander's L∞ `max Γ`.
+    pub linf_sander: Option<f64>,
+    /// The normalisation k = Σ|UV area| / Σ 3-D area.
+    pub uv_area_over_3d_area: Option<f64>,
+    /// Some face has zero UV area but 3-D area.
+    pub strict_infinite: bool,
+    /// Faces used.
+    pub triangles_used: usize,
+}
+
+/// Angle distortion; `_aw` = 3-D-area weighted.
+#[derive(Debug, Clone, Serialize)]
+#[allow(missing_docs)]
+pub struct AngleDistortionJson {
+    pub angle_deviation_deg_mean: Option<f64>,
+    pub angle_deviation_deg_p95: Option<f64>,
+    pub angle_deviation_deg_mean_aw: Option<f64>,
+    pub angle_deviation_deg_p95_aw: Option<f64>,
+    pub conformal_ratio_mean: Option<f64>,
+    pub conformal_ratio_p95: Option<f64>,
+    pub conformal_ratio_mean_aw: Option<f64>,
+    pub conformal_ratio_p95_aw: Option<f64>,
+}
+
+/// Percentiles of the normalised area ratio (UV/3-D area over k); `_aw` = 3-D-area weighted.
+#[derive(Debug, Clone, Serialize)]
+#[allow(missing_docs)]
+pub struct AreaDistortionJson {
+    pub p5: Option<f64>,
+    pub p50: Option<f64>,
+    pub p95: Option<f64>,
+    pub p5_aw: Option<f64>,
+    pub p50_aw: Option<f64>,
+    pub p95_aw: Option<f64>,
+}
+
+/// Overlaps.
+#[derive(Debug, Clone, Serialize)]
+pub struct OverlapJson {
+    /// Face pairs whose open UV interiors intersect, decided with exact predicates.
+    pub exact: ExactOverlapJson,
+    /// The evaluator's texel-centre sampled figures.
+    pub sampled: SampledOverlapJson,
+}
+
+/// Exact overlap pairs.
+#[derive(Debug, Clone, Serialize)]
+pub struct ExactOverlapJson {
+    /// Overlapping face pairs (a lower bound when `truncated`).
+    pub pairs: u64,
+    /// Of which within one chart (fold-overs).
+    pub pairs_same_chart: u64,
+    /// Of which across charts.
+    pub pairs_cross_chart: u64,
+    /// Counting stopped at its cap.
+    pub truncated: bool,
+    /// Up to 16 overlapping face pairs (face indices in (mesh, primitive) order).
+    pub examples: Vec<[u32; 2]>,
+}
+
+/// The evaluator's sampled overlap.
+#[derive(Debug, Clone, Serialize)]
+#[allow(missing_docs)]
+pub struct SampledOverlapJson {
+    pub covered_texels: u64,
+    pub overlapping_texels: u64,
+    pub fraction: f64,
+    pub texels_cross_chart: u64,
+    pub texels_same_chart: u64,
+    pub pairs: u64,
+    pub pairs_same_chart: u64,
+    pub pairs_cross_chart: u64,
+    pub pairs_truncated: bool,
+}
+
+/// Padding check.
+#[derive(Debug, Clone, Serialize)]
+pub struct PaddingJson {
+    /// The padding checked, texels.
+    pub padding_texels: u32,
+    /// Covered texels with a texel of another chart within that Chebyshev distance.
+    pub violation_texels: u64,
+}
+
+/// Texel density across charts (UV units per model unit per chart).
+#[derive(Debug, Clone, Serialize)]
+#[allow(missing_docs)]
+pub struct TexelDensityJson {
+    pub charts_measured: usize,
+    pub min: f64,
+    pub max: f64,
+    pub max_over_min: Option<f64>,
+    pub cv: Option<f64>,
+    pub cv_aw: Option<f64>,
+    /// Texels per model unit of the whole atlas.
+    pub texels_per_unit: Option<f64>,
+}
+
+/// One chart's quality.
+#[derive(Debug, Clone, Serialize)]
+pub struct ChartQualityJson {
+    /// Its lowest face (index in (mesh, primitive) order).
+    pub first_face: u32,
+    /// Its page.
+    pub page: u32,
+    /// Faces.
+    pub faces: usize,
+    /// 3-D area, model units².
+    pub area_3d_m2: f64,
+    /// UV area, page units.
+    pub uv_area: f64,
+    /// L2 stretch (global normalisation).
+    pub l2: Option<f64>,
+    /// Symmetric L∞ stretch.
+    pub linf: Option<f64>,
+    /// sqrt(UV area / 3-D area).
+    pub texel_density: Option<f64>,
+}
+
+impl From<&AtlasReport> for QualityJson {
+    fn from(r: &AtlasReport) -> Self {
+        let s = &r.stretch;
+        let ex = &r.overlap.exact;
+        let sa = &r.overlap.sampled;
+        QualityJson {
+            triangles: r.triangles,
+            unique_corners: r.unique_corners,
+            area_3d_m2: r.area_3d_m2,
+            uv_area: r.uv_area,
+            degenerate: r.degenerate,
+            degenerate_3d: r.degenerate_3d,
+            degenerate_uv_with_3d_area: r.degenerate_uv_with_3d_area,
+            charts: r.charts,
+            seam_edges: r.seam_edges,
+            seam_length_3d_m: r.seam_length_3d_m,
+            seam_edge_ratio: r.seam_edge_ratio,
+            boundary_edge_ratio: r.boundary_edge_ratio,
+            open_border_length_3d_m: r.open_border_length_3d_m,
+            stretch: StretchJson {
+                l2: s.l2,
+                linf: s.linf,
+                linf_sander: s.linf_sander,
+                uv_area_over_3d_area: s.uv_area_over_3d_area,
+                strict_infinite: s.strict_infinite,
+                triangles_used: s.triangles_used,
+            },
+            angle_distortion: r.angle_distortion.as_ref().map(|a| AngleDistortionJson {
+                angle_deviation_deg_mean: a.angle_deviation_deg_mean,
+                angle_deviation_deg_p95: a.angle_deviation_deg_p95,
+                angle_deviation_deg_mean_aw: a.angle_deviation_deg_mean_aw,
+                angle_deviation_deg_p95_aw: a.angle_deviation_deg_p95_aw,
+                conformal_ratio_mean: a.conformal_ratio_mean,
+                conformal_ratio_p95: a.conformal_ratio_p95,
+                conformal_ratio_mean_aw: a.conformal_ratio_mean_aw,
+                conformal_ratio_p95_aw: a.conformal_ratio_p95_aw,
+            }),
+            area_distortion: r.area_distortion.as_ref().map(|a| AreaDistortionJson {
+                p5: a.p5,
+                p50: a.p50,
+                p95: a.p95,
+                p5_aw: a.p5_aw,
+                p50_aw: a.p50_aw,
+                p95_aw: a.p95_aw,
+            }),
+            flipped: r.flipped,
+            charts_minority_orientation: r.charts_minority_orientation,
+            out_of_range_corners: r.out_of_range_corners,
+            out_of_range_triangles: r.out_of_range_triangles,
+            uv_bbox: r.uv_bbox,
+            packing_efficiency: r.packing_efficiency,
+            packing_efficiency_bbox: r.packing_efficiency_bbox,
+            texel_utilization: r.texel_utilization,
+            overlap: OverlapJson {
+                exact: ExactOverlapJson {
+                    pairs: ex.pairs,
+                    pairs_same_chart: ex.pairs_same_chart,
+                    pairs_cross_chart: ex.pairs_cross_chart,
+                    truncated: ex.truncated,
+                    examples: ex.examples.iter().map(|p| p.map(|f| f.0)).collect(),
+                },
+                sampled: SampledOverlapJson {
+                    covered_texels: sa.covered_texels,
+                    overlapping_texels: sa.overlapping_texels,
+                    fraction: sa.fraction,
+                    texels_cross_chart: sa.texels_cross_chart,
+                    texels_same_chart: sa.texels_same_chart,
+                    pairs: sa.pairs,
+                    pairs_same_chart: sa.pairs_same_chart,
+                    pairs_cross_chart: sa.pairs_cross_chart,
+                    pairs_truncated: sa.pairs_truncated,
+                },
+            },
+            padding: PaddingJson {
+                padding_texels: r.padding.padding_texels,
+                violation_texels: r.padding.violation_texels,
+            },
+            texel_density: r.texel_density.as_ref().map(|d| TexelDensityJson {
+                charts_measured: d.charts_measured,
+                min: d.min,
+                max: d.max,
+                max_over_min: d.max_over_min,
+                cv: d.cv,
+                cv_aw: d.cv_aw,
+                texels_per_unit: d.texels_per_unit,
+            }),
+            per_chart: r
+                .per_chart
+                .iter()
+                .map(|c| ChartQualityJson {
+                    first_face: c.first_face.0,
+                    page: c.page,
+                    faces: c.faces,
+                    area_3d_m2: c.area_3d_m2,
+                    uv_area: c.uv_area,
+                    l2: c.l2,
+                    linf: c.linf,
+                    texel_density: c.texel_density,
+                })
+                .collect(),
+        }
     }
 }

@@ -87,7 +87,7 @@ impl Quality {
             linf: f("/quality/stretch/linf").unwrap_or(f64::INFINITY),
             packing: f("/quality/packing_efficiency")?,
             flipped: u("/quality/flipped")?,
-            overlaps: u("/quality/overlap/exact_pairs")?,
+            overlaps: u("/quality/overlap/exact/pairs")?,
         })
     }
 }

@@ -1,36 +1,66 @@
-//! `encode`: decoded [`Asset`] + per-corner UVs → the same asset with a new `TEXCOORD_k`.
+//! `encode` / `encode_pages`: decoded [`Asset`] + per-corner UVs (+ the texture page of every
+//! face) → the same asset with a new `TEXCOORD_k`, one primitive per (source primitive, page).
 //!
-//! Purpose: write atlas UVs back into the asset and change nothing else.
+//! Purpose: write atlas UVs back into the asset and change nothing else. When the packer had to
+//! open several pages, give every primitive one output primitive per page it has faces on, so
+//! any renderer can bind one texture per page.
 //!
 //! Invariants:
-//! - Vertices are split only where needed: a primitive gets one output vertex per distinct
-//!   (source vertex, UV bits) pair, numbered in order of first use by its corners, so the output
-//!   is deterministic. Every vertex attribute (NORMAL, TANGENT, COLOR_n, JOINTS_n, WEIGHTS_n,
-//!   existing TEXCOORD_n, custom `_FOO`) and every morph-target attribute is copied element by
-//!   element in its original componentType, normalized flag and layout (quantized stays
-//!   quantized), sparse substitution applied.
+//! - Vertices are split only where needed: a primitive (a part, see below) gets one output
+//!   vertex per distinct (source vertex, UV bits) pair among its faces, numbered in order of
+//!   first use by its corners, so the output is deterministic. Every vertex attribute (NORMAL,
+//!   TANGENT, COLOR_n, JOINTS_n, WEIGHTS_n, existing TEXCOORD_n, custom `_FOO`) and every
+//!   morph-target attribute is copied element by element in its original componentType,
+//!   normalized flag and layout (quantized stays quantized), sparse substitution applied.
 //! - Triangle `i` of a primitive keeps its corners in the same order; strips and fans become
 //!   TRIANGLES lists in the decoder's triangle order. Indices are u16 when every index fits
 //!   below the primitive-restart value 65535, else u32.
+//! - Pages ([`encode_pages`]): the faces of a triangle primitive are grouped by page. The part
+//!   on its lowest page is written in place (same mesh, same primitive index); each part on a
+//!   higher page is a copy of the source primitive's JSON (material, `mode`, `extras`,
+//!   `extensions` including `KHR_materials_variants` mappings, `targets`) with its own
+//!   accessors, appended to the end of the same mesh's `primitives` in (primitive, page) order.
+//!   Within a part, triangles keep the source face order. So a primitive on one page is
+//!   written exactly as [`encode`] writes it (byte-identical output for single-page input),
+//!   the (mesh, primitive) index of every single-page primitive never moves, every part of a
+//!   mesh has the same number of morph targets, and the mesh's `weights` and `extras` (e.g.
+//!   `targetNames`) stay valid untouched. [`EncodedAsset::parts`] lists where each part went.
 //! - The JSON tree is the input's, edited only at: the rewritten primitives' `attributes`,
-//!   `indices`, `targets`, `mode`; appended accessors and buffer views; `bufferViews[*].buffer`
-//!   / `byteOffset` (rebased into one buffer); `buffers` (one buffer); external images (now a
-//!   `bufferView` + `mimeType`). Existing accessors keep their indices and data, so skins,
-//!   animations and unknown extensions that reference them stay valid. The one exception is
-//!   [`OldVertexData::DropWhenSafe`]: accessors that only the rewritten primitives used become
-//!   one-element zero accessors and their bytes leave the buffer, but only when no other
-//!   primitive, skin or animation references them and every extension in the document is known
-//!   not to reference accessors or buffer views.
+//!   `indices`, `targets`, `mode`; primitives appended for other pages; appended accessors and
+//!   buffer views; `bufferViews[*].buffer` / `byteOffset` (rebased into one buffer); `buffers`
+//!   (one buffer); external images (now a `bufferView` + `mimeType`). Existing accessors keep
+//!   their indices and data, so skins, animations and unknown extensions that reference them
+//!   stay valid. The one exception is [`OldVertexData::DropWhenSafe`]: accessors that only the
+//!   rewritten primitives used become one-element zero accessors and their bytes leave the
+//!   buffer, but only when no other primitive, skin or animation references them and every
+//!   extension in the document is known not to reference accessors or buffer views.
 //! - Vertex-attribute elements are 4-byte aligned (a padded `byteStride` when an element is not
 //!   a multiple of 4 bytes), as the spec requires; `min`/`max` are recomputed for POSITION
 //!   (attribute and morph target) and wherever the source accessor had them.
 //!
-//! Units: UVs as given (normally \[0,1\]), written as float VEC2.
+//! What a split cannot keep exact (documented, not detected):
+//! - The page is not recorded in the glTF: every part keeps the source `material`, so binding
+//!   page `p`'s texture to the parts on page `p` is the caller's job, from
+//!   [`EncodedAsset::parts`] (the report).
+//! - `extras` and unknown `extensions` of a split primitive are copied verbatim to every part.
+//!   Data in them that describes the primitive as a whole (an id, a vertex count, accessor
+//!   indices of an unknown extension) then describes the whole source primitive on each part.
+//!   Accessors such an extension references keep their data, because an unknown extension
+//!   disables [`OldVertexData::DropWhenSafe`].
+//! - Anything outside the document that addresses primitives by index sees the lowest-page
+//!   part at the old index and the other parts at new ones. (No glTF 2.0 property references a
+//!   primitive by index.)
+//!
+//! Units: UVs as given (normally \[0,1\] on their page), written as float VEC2. A page is an
+//! opaque `u32` index (pages need not be dense); every page is its own \[0,1\]² UV space.
 //!
 //! References: glTF 2.0 spec §3.6.2.4 (data alignment), §3.6.2.5 (accessor bounds: min/max are
-//! raw values, `normalized` has no effect), §3.7.2.1 (primitive modes), §4.4 (GLB).
+//! raw values, `normalized` has no effect), §3.7.2.1 (primitive modes), §3.7.2.2 (morph targets:
+//! every primitive of a mesh has the same number), §4.4 (GLB); `KHR_materials_variants`
+//! (mappings live on the primitive).
 use std::collections::hash_map::Entry;
 use std::collections::HashMap;
+use std::ops::Range;
 
 use base64::Engine as _;
 use serde_json::{json, Map, Value};
@@ -78,7 +108,7 @@ pub enum OldVertexData {
     Keep,
 }
 
-/// Options of [`encode`].
+/// Options of [`encode`] and [`encode_pages`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct EncodeOptions {
     /// Where the UVs go. Default: [`UvTarget::FirstFree`].
@@ -94,8 +124,37 @@ pub struct EncodeOptions {
 pub struct EncodedAsset {
     /// The file.
     pub bytes: Vec<u8>,
-    /// The `k` of the `TEXCOORD_k` written, per [`Asset::triangle_primitives`] entry.
+    /// The `k` of the `TEXCOORD_k` written, per [`Asset::triangle_primitives`] entry (every
+    /// part of a split primitive gets the same `k`).
     pub uv_set_per_primitive: Vec<u32>,
+    /// Where the faces of every triangle primitive went: one entry per (primitive, page) that
+    /// has at least one face, sorted by (primitive, page), which is (mesh, primitive, page)
+    /// order. A primitive without triangles is written unchanged and has no part. With
+    /// [`encode`] (one page) this is one part per non-empty triangle primitive, on page 0, at
+    /// its source indices.
+    pub parts: Vec<EncodedPart>,
+}
+
+/// One output primitive: the faces of one source triangle primitive that lie on one page.
+///
+/// Its triangles are the source primitive's faces whose page is [`EncodedPart::page`], in
+/// [`Asset::mesh_input`] face order, each with its corners in the source order; so output
+/// triangle `i` of the part is the `i`-th such face.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct EncodedPart {
+    /// The source primitive: an index into [`Asset::triangle_primitives`].
+    pub primitive: usize,
+    /// The page of every face of this part, as given to [`encode_pages`] (0 for [`encode`]).
+    pub page: u32,
+    /// Index into the output's `meshes` (always the source primitive's mesh: meshes are never
+    /// added, removed or renumbered).
+    pub mesh_index: usize,
+    /// Index into that mesh's output `primitives`. The part on the primitive's lowest page
+    /// keeps the source index; parts on other pages are appended after the mesh's source
+    /// primitives in (primitive, page) order.
+    pub primitive_index: usize,
+    /// Number of triangles in the part (≥ 1).
+    pub faces: usize,
 }
 
 impl EncodedAsset {
@@ -108,16 +167,63 @@ impl EncodedAsset {
             .all(|&k| k == first)
             .then_some(first)
     }
+
+    /// The distinct pages that hold at least one part, ascending.
+    pub fn pages(&self) -> Vec<u32> {
+        let mut pages: Vec<u32> = self.parts.iter().map(|p| p.page).collect();
+        pages.sort_unstable();
+        pages.dedup();
+        pages
+    }
+
+    /// The parts on `page`, in (mesh, primitive) order: the output primitives a renderer draws
+    /// with that page's texture.
+    pub fn parts_on_page(&self, page: u32) -> impl Iterator<Item = &EncodedPart> + '_ {
+        self.parts.iter().filter(move |p| p.page == page)
+    }
 }
 
 /// Writes `corner_uvs` (`corner_uvs[f]` = UVs of the 3 corners of `asset.mesh_input()` face `f`,
-/// in corner order) into the asset. See the module doc for what changes and what does not.
+/// in corner order) into the asset, all on one page. See the module doc for what changes and
+/// what does not.
+///
+/// Same as [`encode_pages`] with every face on page 0, byte for byte.
 ///
 /// Cost: copies every buffer once, reads every attribute of every triangle primitive once and
 /// writes it split; memory about 2× the asset plus the split vertex data.
 pub fn encode(
     asset: &Asset,
     corner_uvs: &[[[f32; 2]; 3]],
+    options: &EncodeOptions,
+) -> Result<EncodedAsset, GltfError> {
+    // 4 bytes per face, small beside the vertex data `encode_pages` writes.
+    let one_page = vec![0u32; asset.mesh_input.triangles.len()];
+    encode_pages(asset, corner_uvs, &one_page, options)
+}
+
+/// Writes `corner_uvs` into the asset like [`encode`], with face `f` on texture page
+/// `face_page[f]` (any `u32`; each page is its own \[0,1\]² UV space).
+///
+/// A triangle primitive whose faces all lie on one page is written exactly as [`encode`] writes
+/// it, whichever page that is. A primitive whose faces lie on several pages is split into one
+/// primitive per page, so a renderer can bind one texture per page: the part on its lowest page
+/// keeps the source primitive's index, the others are appended to the end of the same mesh's
+/// `primitives` in (primitive, page) order. Every part is a copy of the source primitive's JSON
+/// (material, mode, extras, extensions such as `KHR_materials_variants` mappings, targets)
+/// with its own accessors, holding only the vertices its faces use (split at UV seams as
+/// usual, morph targets gathered for the same vertices). [`EncodedAsset::parts`] says where
+/// each part went.
+///
+/// Errors: [`ErrorCode::UvInput`] when `corner_uvs` or `face_page` does not have one entry per
+/// face of [`Asset::mesh_input`] or a UV is not finite; [`ErrorCode::UvTarget`] as for
+/// [`encode`].
+///
+/// Cost: as [`encode`], plus sorting the faces of each multi-page primitive by page
+/// (O(n log n) in its faces) and 8 bytes per face for the per-part face lists.
+pub fn encode_pages(
+    asset: &Asset,
+    corner_uvs: &[[[f32; 2]; 3]],
+    face_page: &[u32],
     options: &EncodeOptions,
 ) -> Result<EncodedAsset, GltfError> {
     let faces = asset.mesh_input.triangles.len();
@@ -141,6 +247,25 @@ pub fn encode(
             "",
             format!("face {f} has a non-finite UV {:?}", corner_uvs[f]),
             "the atlas must produce finite UVs",
+        ));
+    }
+    if face_page.len() != faces {
+        // Name the primitive of the first face without a page (none when the list is too long).
+        let path = asset
+            .primitives
+            .iter()
+            .find(|p| p.faces.contains(&face_page.len()))
+            .map(|p| format!("/meshes/{}/primitives/{}", p.mesh_index, p.primitive_index))
+            .unwrap_or_default();
+        return Err(GltfError::new(
+            ErrorCode::UvInput,
+            path,
+            format!(
+                "got pages for {} faces, the asset has {faces}",
+                face_page.len()
+            ),
+            "pass one page index per face of Asset::mesh_input(), in face order \
+             (Atlas::face_page), or call encode for a single page",
         ));
     }
     let targets = asset
@@ -245,10 +370,13 @@ pub fn encode(
         obj.insert("bufferView".into(), json!(view));
     }
 
-    // 3. Rewrite every triangle primitive.
+    // 3. Rewrite every triangle primitive, one part per page it has faces on.
     let reader = Reader::new(&asset.json, &asset.buffers, &asset.limits)?;
     let mut packed_cache: HashMap<usize, Vec<u8>> = HashMap::new();
-    for (prim, &uv_set) in asset.primitives.iter().zip(&targets) {
+    let mut parts = Vec::new();
+    // Parts on a primitive's other pages: (part, its JSON), appended to their mesh below.
+    let mut appended: Vec<(EncodedPart, Value)> = Vec::new();
+    for (k, (prim, &uv_set)) in asset.primitives.iter().zip(&targets).enumerate() {
         // A primitive without triangles (a strip of two vertices) has nothing to carry UVs and
         // would need zero-element accessors, which glTF forbids: it stays as it was.
         if prim.faces.is_empty() {
@@ -259,13 +387,19 @@ pub fn encode(
             prim.mesh_index, prim.primitive_index
         );
         let source_prim = asset.json.pointer(&path).cloned().unwrap_or(Value::Null);
-        let split = split_vertices(prim, &asset.mesh_input.triangles, corner_uvs);
         let uv_name = format!("TEXCOORD_{uv_set}");
-
-        let mut gather =
-            |name: &str, index: u64, ref_path: &str, out: &mut Output| -> Result<u64, GltfError> {
+        for (part_number, (page, part_faces)) in faces_by_page(prim.faces.clone(), face_page)
+            .into_iter()
+            .enumerate()
+        {
+            let split = split_vertices(prim, &part_faces, &asset.mesh_input.triangles, corner_uvs);
+            let mut gather = |name: &str,
+                              index: u64,
+                              ref_path: &str,
+                              out: &mut Output|
+             -> Result<u64, GltfError> {
                 let layout = reader.layout(index, ref_path)?;
-                // Accessors shared by several primitives are read once.
+                // Accessors shared by several primitives (or parts) are read once.
                 let packed: &[u8] = match packed_cache.entry(layout.index) {
                     Entry::Occupied(e) => e.into_mut(),
                     Entry::Vacant(e) => e.insert(reader.read_packed(layout)?),
@@ -276,58 +410,103 @@ pub fn encode(
                 Ok(out.push_gathered(layout, packed, &split.source, with_bounds, source_json))
             };
 
-        let mut attributes = Map::new();
-        let mut wrote_uv = false;
-        if let Some(source) = source_prim.get("attributes").and_then(Value::as_object) {
-            for (name, value) in source {
-                let index = value.as_u64().unwrap_or(u64::MAX);
-                if *name == uv_name {
-                    attributes.insert(name.clone(), json!(out.push_uvs(&split.uvs)));
-                    wrote_uv = true;
-                } else {
-                    let new = gather(name, index, &format!("{path}/attributes/{name}"), &mut out)?;
-                    attributes.insert(name.clone(), json!(new));
-                }
-            }
-        }
-        if !wrote_uv {
-            attributes.insert(uv_name.clone(), json!(out.push_uvs(&split.uvs)));
-        }
-        let mut new_targets = Vec::new();
-        for (t, target) in array(&source_prim, "targets").iter().enumerate() {
-            let mut new_target = Map::new();
-            if let Some(target) = target.as_object() {
-                for (name, value) in target {
-                    if *name == uv_name {
-                        continue;
-                    }
+            let mut attributes = Map::new();
+            let mut wrote_uv = false;
+            if let Some(source) = source_prim.get("attributes").and_then(Value::as_object) {
+                for (name, value) in source {
                     let index = value.as_u64().unwrap_or(u64::MAX);
-                    let new = gather(name, index, &format!("{path}/targets/{t}/{name}"), &mut out)?;
-                    new_target.insert(name.clone(), json!(new));
+                    if *name == uv_name {
+                        attributes.insert(name.clone(), json!(out.push_uvs(&split.uvs)));
+                        wrote_uv = true;
+                    } else {
+                        let new =
+                            gather(name, index, &format!("{path}/attributes/{name}"), &mut out)?;
+                        attributes.insert(name.clone(), json!(new));
+                    }
                 }
             }
-            new_targets.push(Value::Object(new_target));
-        }
-        let indices = out.push_indices(&split.indices, split.source.len());
+            if !wrote_uv {
+                attributes.insert(uv_name.clone(), json!(out.push_uvs(&split.uvs)));
+            }
+            let mut new_targets = Vec::new();
+            for (t, target) in array(&source_prim, "targets").iter().enumerate() {
+                let mut new_target = Map::new();
+                if let Some(target) = target.as_object() {
+                    for (name, value) in target {
+                        if *name == uv_name {
+                            continue;
+                        }
+                        let index = value.as_u64().unwrap_or(u64::MAX);
+                        let new =
+                            gather(name, index, &format!("{path}/targets/{t}/{name}"), &mut out)?;
+                        new_target.insert(name.clone(), json!(new));
+                    }
+                }
+                new_targets.push(Value::Object(new_target));
+            }
+            let indices = out.push_indices(&split.indices, split.source.len());
 
-        let Some(obj) = json.pointer_mut(&path).and_then(Value::as_object_mut) else {
-            return Err(GltfError::new(
-                ErrorCode::Internal,
-                path,
-                "primitive vanished",
-                "report this bug",
-            ));
-        };
-        obj.insert("attributes".into(), Value::Object(attributes));
-        obj.insert("indices".into(), json!(indices));
-        if obj.contains_key("mode") || prim.mode != PrimitiveMode::Triangles {
-            obj.insert("mode".into(), json!(4));
-        }
-        if obj.contains_key("targets") {
-            obj.insert("targets".into(), Value::Array(new_targets));
+            let mut part = EncodedPart {
+                primitive: k,
+                page,
+                mesh_index: prim.mesh_index,
+                primitive_index: prim.primitive_index,
+                faces: part_faces.len(),
+            };
+            let mut copy = Value::Null;
+            let obj = if part_number == 0 {
+                json.pointer_mut(&path).and_then(Value::as_object_mut)
+            } else {
+                copy = source_prim.clone();
+                copy.as_object_mut()
+            };
+            let Some(obj) = obj else {
+                return Err(GltfError::new(
+                    ErrorCode::Internal,
+                    path,
+                    "primitive vanished",
+                    "report this bug",
+                ));
+            };
+            obj.insert("attributes".into(), Value::Object(attributes));
+            obj.insert("indices".into(), json!(indices));
+            if obj.contains_key("mode") || prim.mode != PrimitiveMode::Triangles {
+                obj.insert("mode".into(), json!(4));
+            }
+            if obj.contains_key("targets") {
+                obj.insert("targets".into(), Value::Array(new_targets));
+            }
+            if part_number == 0 {
+                parts.push(part);
+            } else {
+                // The output index is assigned when the copies are appended, below.
+                part.primitive_index = usize::MAX;
+                appended.push((part, copy));
+            }
         }
     }
     drop(reader);
+    // Append the other pages' parts to their meshes in (mesh, primitive, page) order. The
+    // decoder lists primitives in (mesh, primitive) order already; the stable sort makes the
+    // order independent of that.
+    appended.sort_by_key(|(part, _)| (part.mesh_index, part.primitive, part.page));
+    for (mut part, copy) in appended {
+        let list = json
+            .pointer_mut(&format!("/meshes/{}/primitives", part.mesh_index))
+            .and_then(Value::as_array_mut);
+        let Some(list) = list else {
+            return Err(GltfError::new(
+                ErrorCode::Internal,
+                format!("/meshes/{}/primitives", part.mesh_index),
+                "mesh primitives vanished",
+                "report this bug",
+            ));
+        };
+        part.primitive_index = list.len();
+        list.push(copy);
+        parts.push(part);
+    }
+    parts.sort_by_key(|p| (p.primitive, p.page));
 
     // 4. Append the new views and accessors, write the one buffer. Views nothing references
     //    any more point at the start of the buffer (their bytes are gone; they stay only so
@@ -401,6 +580,7 @@ pub fn encode(
     Ok(EncodedAsset {
         bytes,
         uv_set_per_primitive: targets,
+        parts,
     })
 }
 
@@ -562,12 +742,35 @@ struct Split {
     indices: Vec<u32>,
 }
 
+/// The faces of `faces` grouped by page: (page, faces in ascending order), pages ascending.
+/// `face_page` has been checked to cover every face.
+fn faces_by_page(faces: Range<usize>, face_page: &[u32]) -> Vec<(u32, Vec<usize>)> {
+    let page_of = |f: usize| face_page.get(f).copied().unwrap_or(0);
+    let first = page_of(faces.start);
+    if faces.clone().all(|f| page_of(f) == first) {
+        return vec![(first, faces.collect())];
+    }
+    let mut order: Vec<usize> = faces.collect();
+    // Stable: faces stay in source order within a page.
+    order.sort_by_key(|&f| page_of(f));
+    let mut groups: Vec<(u32, Vec<usize>)> = Vec::new();
+    for f in order {
+        let page = page_of(f);
+        match groups.last_mut() {
+            Some((p, list)) if *p == page => list.push(f),
+            _ => groups.push((page, vec![f])),
+        }
+    }
+    groups
+}
+
+/// Splits the vertices of `faces` (faces of `prim`, in output order).
 fn split_vertices(
     prim: &TrianglePrimitive,
+    faces: &[usize],
     triangles: &[[u32; 3]],
     corner_uvs: &[[[f32; 2]; 3]],
 ) -> Split {
-    let faces = prim.faces.clone();
     // Per source vertex, a chain of the output vertices made from it so far (`head`, then
     // `next`). Chains are as long as the number of distinct UVs at a vertex (a handful), so
     // this is linear in the corners, without hashing, and deterministic.
@@ -579,7 +782,7 @@ fn split_vertices(
         uvs: Vec::with_capacity(faces.len()),
         indices: Vec::with_capacity(faces.len() * 3),
     };
-    for f in faces {
+    for &f in faces {
         let (Some(tri), Some(uvs)) = (triangles.get(f), corner_uvs.get(f)) else {
             continue;
         };

@@ -5,7 +5,10 @@
 //! the caller supplies in [`Resources`], validates it, and extracts the triangles of every
 //! triangle primitive (lists, strips, fans) as one [`MeshInput`]. [`encode`] takes per-corner
 //! UVs for those triangles and writes the same asset back with a new float `TEXCOORD_k`,
-//! splitting vertices only where the UVs differ.
+//! splitting vertices only where the UVs differ. [`encode_pages`] also takes the texture page of
+//! every face and splits a primitive whose faces lie on several pages into one primitive per
+//! page (same material and every other property), reporting where each part went in
+//! [`EncodedAsset::parts`]; for single-page input it writes exactly what [`encode`] writes.
 //!
 //! # Invariants
 //! - No filesystem or network access, ever: external files come from [`Resources`]; URIs with
@@ -18,7 +21,8 @@
 //! - Every error carries the JSON pointer at fault ([`GltfError::json_path`]).
 //! - The output is the input's JSON tree (`serde_json::Value` with preserved key order) with
 //!   only these edits: the attributes/indices/targets/mode of triangle primitives point to new
-//!   accessors; new accessors and buffer views are appended; buffers are merged into one (the
+//!   accessors; primitives for a split primitive's other pages are appended to its mesh; new
+//!   accessors and buffer views are appended; buffers are merged into one (the
 //!   GLB BIN chunk, or one `data:` buffer for `.gltf`) and buffer views rebased; external images
 //!   are embedded through a buffer view. Existing accessors are never renumbered, so
 //!   animations, skins and unknown extensions that reference them stay valid. The rewritten
@@ -27,6 +31,10 @@
 //!   they are kept as they were.
 //! - Meshes are unwrapped once, in mesh-local space: node transforms are not applied and a
 //!   mesh instanced by several nodes appears once.
+//! - Multi-page output never renumbers meshes or moves a single-page primitive: the part on a
+//!   primitive's lowest page keeps its (mesh, primitive) index, parts on other pages are
+//!   appended to the same mesh in (primitive, page) order (see `encode.rs` for what a copy
+//!   cannot keep exact).
 //!
 //! # Units
 //! Positions are in the asset's units (metres by glTF convention); UVs are in \[0,1\] texture
@@ -46,7 +54,10 @@ pub use decode::{
     decode, required_resources, Asset, AssetSummary, DecodeLimits, MeshSummary, PrimitiveMode,
     PrimitiveSummary, SourceFormat, TrianglePrimitive,
 };
-pub use encode::{encode, EncodeOptions, EncodedAsset, OldVertexData, OutputFormat, UvTarget};
+pub use encode::{
+    encode, encode_pages, EncodeOptions, EncodedAsset, EncodedPart, OldVertexData, OutputFormat,
+    UvTarget,
+};
 pub use error::{ErrorCode, GltfError};
 pub use uri::{relative_path_of, Resources};
 

@@ -1,12 +1,38 @@
 //! Packing: place flattened charts on texture pages (issue 5).
 //!
-//! INTERFACE SKELETON — the implementation (horizon packer of lscm-2002 §4 extended as
-//! isocharts-2004 §6) lands with issue 5; until then `pack_charts` is not callable from the
-//! product (nothing in `atlas::generate` ships before it is done).
+//! Purpose: the third stage of the atlas pipeline. [`pack_charts`] scales every chart to one
+//! texel density, turns it, and places it with the horizon ("Tetris") packer of lscm-2002 §4,
+//! extended as isocharts-2004 §6 (insertion from four directions, 16 rotations), then writes
+//! normalized page UVs.
+//!
+//! **Stage contract (GUIDE.md).** Charts never overlap, keep `padding_texels` empty texels
+//! between each other and from the page edge, and stay inside \[0,1\]². Exactly: the
+//! conservative footprints (every texel a triangle touches) of two charts on a page are at
+//! Chebyshev distance `> padding_texels`, and every footprint texel is at least
+//! `padding_texels` from the page edge, so the texel-centre sampled coverage of the
+//! independent evaluator (`../shared/eval/atlas_eval.py`, "padding.violation_texels") is too.
+//! Every chart has the same density: placed UV area = `area_m2 × texels_per_unit²` texels².
+//! Deterministic: integer horizons, fixed orders, ties by index; no hash maps, no threads.
 //!
 //! Units: chart UVs come in model units (as the parameterizer returns them); placed UVs are
 //! normalized page coordinates in \[0,1\]² (u right, v down, glTF convention); sizes on the page
 //! are in texels (`_texels`); densities in texels per model unit.
+//!
+//! Code map: [`raster`] (conservative footprints and Chebyshev dilation), [`place`] (density,
+//! diameter orientation, rotations, per-line footprint extents), [`horizon`] (the four-direction
+//! horizon packer, one page), this file (options, the fit-to-page density search, output).
+//!
+//! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
+//! Automatic Texture Atlas Generation", SIGGRAPH 2002, §4; K. Zhou, J. Snyder, B. Guo,
+//! H.-Y. Shum, "Iso-charts", SGP 2004, §6.
+pub mod horizon;
+pub mod place;
+pub mod raster;
+pub mod test_charts;
+
+#[cfg(test)]
+mod tests;
+
 use std::ops::ControlFlow;
 
 /// How big charts are on the page.
@@ -101,19 +127,479 @@ pub enum PackError {
         /// Page size.
         page_texels: [u32; 2],
     },
+    /// A chart's data is unusable.
+    #[error("chart {chart} cannot be packed: {detail}")]
+    InvalidChart {
+        /// Index of the chart.
+        chart: usize,
+        /// What is wrong and how to fix it.
+        detail: String,
+    },
+    /// With [`TexelDensity::FitToPage`]: even at a density where every chart is one texel, the
+    /// charts and their padding do not fit on one page.
+    #[error("{charts} charts with {padding_texels} texels of padding do not fit on one {page_texels:?} page at any density; raise the resolution, lower padding_texels, or use TexelsPerUnit (more pages)")]
+    DoesNotFit {
+        /// Number of charts to place.
+        charts: usize,
+        /// Page size.
+        page_texels: [u32; 2],
+        /// Padding asked for.
+        padding_texels: u32,
+    },
     /// The monitor asked to stop.
     #[error("packing was cancelled")]
     Cancelled,
 }
 
+/// Largest page side accepted, texels (`width_texels`, `height_texels`): bounds the memory of
+/// the horizons (O(side)) and of a footprint (at most one page of bits).
+pub const MAX_PAGE_TEXELS: u32 = 16384;
+
+/// Largest `rotations` accepted (each rotation costs one footprint search per chart).
+pub const MAX_ROTATIONS: u32 = 64;
+
+/// Packing trials at most of [`TexelDensity::FitToPage`] (each is a full packing).
+pub const MAX_FIT_TRIALS: usize = 16;
+
+/// [`TexelDensity::FitToPage`] stops when the largest density known to fit is within this
+/// ratio of the smallest known not to fit.
+pub const FIT_TOLERANCE: f64 = 3e-3;
+
 /// Places every chart on pages without overlap, keeping `padding_texels` between charts and from
 /// the page edge, all UVs in \[0,1\]. `monitor((done, total))` is called between charts; `Break`
 /// cancels with [`PackError::Cancelled`].
+///
+/// Guarantees: the conservative footprints ([`raster`]) of any two charts on a page are more
+/// than `padding_texels` apart (Chebyshev) and at least `padding_texels` from the page edge, so
+/// texel-centre sampled coverage is too; every chart has the same density (placed UV area =
+/// `area_m2 × texels_per_unit²` texels²); UVs finite in \[0,1\]; deterministic.
+///
+/// Errors: [`PackError::InvalidOption`], [`PackError::InvalidChart`],
+/// [`PackError::ChartTooLarge`] (fixed density only), [`PackError::DoesNotFit`] (fit-to-page
+/// only), [`PackError::Cancelled`].
+///
+/// Cost: one packing per density trial (one with a fixed density, at most
+/// [`MAX_FIT_TRIALS`] + 1 with fit-to-page, typically 6–10); a packing rasterizes
+/// `⌈rotations / 4⌉` footprints per chart (or `rotations` when not a multiple of 4) and runs
+/// the horizon search of [`horizon`] for every orientation.
 pub fn pack_charts(
     charts: &[PackChart<'_>],
     options: &PackOptions,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
 ) -> Result<Packing, PackError> {
-    let _ = (charts, options, monitor);
-    unimplemented!("issue 5: horizon packer")
+    validate_options(options)?;
+    let prepared = charts
+        .iter()
+        .enumerate()
+        .map(|(i, c)| place::prepare_chart(i, c))
+        .collect::<Result<Vec<_>, _>>()?;
+    // Largest first (lscm-2002 §4 step 2, isocharts-2004 §6 step 2); ties by index.
+    let mut order: Vec<usize> = (0..charts.len())
+        .filter(|&i| prepared[i].has_vertices)
+        .collect();
+    order.sort_by(|&a, &b| {
+        prepared[b]
+            .area_m2
+            .total_cmp(&prepared[a].area_m2)
+            .then(a.cmp(&b))
+    });
+    let ctx = Context {
+        charts,
+        prepared: &prepared,
+        order: &order,
+        options,
+    };
+    let trial = match options.density {
+        TexelDensity::TexelsPerUnit(d) => {
+            let mut progress = Progress::new(monitor, order.len());
+            let t = ctx.run(d, true, &mut progress)?;
+            progress.finish()?;
+            t
+        }
+        TexelDensity::FitToPage => fit_to_page(&ctx, monitor)?,
+    };
+    Ok(ctx.output(&trial))
+}
+
+fn validate_options(o: &PackOptions) -> Result<(), PackError> {
+    for (name, v) in [
+        ("width_texels", o.width_texels),
+        ("height_texels", o.height_texels),
+    ] {
+        if !(1..=MAX_PAGE_TEXELS).contains(&v) {
+            return Err(PackError::InvalidOption {
+                option: name,
+                detail: format!(
+                    "{v} texels is outside 1..={MAX_PAGE_TEXELS}; use e.g. 1024, or pages of at most {MAX_PAGE_TEXELS} with TexelsPerUnit for more"
+                ),
+            });
+        }
+    }
+    let side = o.width_texels.min(o.height_texels);
+    if u64::from(o.padding_texels) * 2 + 1 > u64::from(side) {
+        return Err(PackError::InvalidOption {
+            option: "padding_texels",
+            detail: format!(
+                "{} leaves no room for a chart on a {}×{} page (2·padding + 1 must be at most {side}); use a smaller padding, e.g. 2",
+                o.padding_texels, o.width_texels, o.height_texels
+            ),
+        });
+    }
+    if !(1..=MAX_ROTATIONS).contains(&o.rotations) {
+        return Err(PackError::InvalidOption {
+            option: "rotations",
+            detail: format!(
+                "{} is outside 1..={MAX_ROTATIONS}; use 1 (diameter vertical only) up to 16 (isocharts-2004)",
+                o.rotations
+            ),
+        });
+    }
+    if let TexelDensity::TexelsPerUnit(d) = o.density {
+        if !(d.is_finite() && d > 0.0) {
+            return Err(PackError::InvalidOption {
+                option: "density",
+                detail: format!(
+                    "TexelsPerUnit({d}) is not a finite positive density; use e.g. TexelsPerUnit(256.0), or FitToPage"
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Forwards progress to the caller's monitor, monotonically.
+struct Progress<'m> {
+    monitor: &'m mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
+    done: usize,
+    total: usize,
+}
+
+impl<'m> Progress<'m> {
+    fn new(monitor: &'m mut dyn FnMut((usize, usize)) -> ControlFlow<()>, total: usize) -> Self {
+        Self {
+            monitor,
+            done: 0,
+            total,
+        }
+    }
+
+    fn step(&mut self) -> Result<(), PackError> {
+        self.done = (self.done + 1).min(self.total);
+        match (self.monitor)((self.done, self.total)) {
+            ControlFlow::Continue(()) => Ok(()),
+            ControlFlow::Break(()) => Err(PackError::Cancelled),
+        }
+    }
+
+    fn finish(&mut self) -> Result<(), PackError> {
+        self.done = self.total;
+        match (self.monitor)((self.total, self.total)) {
+            ControlFlow::Continue(()) => Ok(()),
+            ControlFlow::Break(()) => Err(PackError::Cancelled),
+        }
+    }
+}
+
+/// Everything a trial needs.
+struct Context<'c, 'a> {
+    charts: &'c [PackChart<'a>],
+    prepared: &'c [place::PreparedChart],
+    order: &'c [usize],
+    options: &'c PackOptions,
+}
+
+/// Where one chart went in a trial.
+#[derive(Debug, Clone)]
+struct Placed {
+    page: u32,
+    affine: [[f64; 3]; 2],
+    x: i32,
+    y: i32,
+}
+
+/// The outcome of packing at one density.
+struct Trial {
+    texels_per_unit: f64,
+    placed: Vec<Option<Placed>>,
+    pages: Vec<horizon::HorizonPage>,
+    /// Σ area_m2 of the charts not placed (single-page trials stop at the first that does not
+    /// fit).
+    unplaced_area_m2: f64,
+    /// 1 when a single-page trial stopped at a chart that did not fit, else 0.
+    unplaced: usize,
+    /// The largest, over charts, of the smallest page-size ratio any orientation needs.
+    worst_size_ratio: f64,
+}
+
+impl Context<'_, '_> {
+    fn page(&self) -> [u32; 2] {
+        [self.options.width_texels, self.options.height_texels]
+    }
+
+    /// Packs every chart at `texels_per_unit`. With `multi_page`, charts that do not fit open
+    /// pages (an error when one does not fit an empty page); otherwise there is one page and
+    /// charts that do not fit are counted in `unplaced`.
+    fn run(
+        &self,
+        texels_per_unit: f64,
+        multi_page: bool,
+        progress: &mut Progress<'_>,
+    ) -> Result<Trial, PackError> {
+        let o = self.options;
+        let [w, h] = self.page();
+        let mut trial = Trial {
+            texels_per_unit,
+            placed: vec![None; self.charts.len()],
+            pages: vec![horizon::HorizonPage::new(w, h)],
+            unplaced_area_m2: 0.0,
+            unplaced: 0,
+            worst_size_ratio: 0.0,
+        };
+        for &i in self.order {
+            progress.step()?;
+            let orients = place::orientations(
+                &self.charts[i],
+                &self.prepared[i],
+                texels_per_unit,
+                o.rotations,
+                o.padding_texels,
+                [w, h],
+            );
+            let ratio = orients
+                .iter()
+                .map(|o| {
+                    (o.width_texels as f64 / f64::from(w))
+                        .max(o.height_texels as f64 / f64::from(h))
+                })
+                .fold(f64::INFINITY, f64::min);
+            trial.worst_size_ratio = trial.worst_size_ratio.max(ratio);
+            let mut found = None;
+            for (p, page) in trial.pages.iter().enumerate() {
+                if let Some(pl) = page.find(&orients) {
+                    found = Some((p, pl));
+                    break;
+                }
+            }
+            if found.is_none() && multi_page {
+                let page = horizon::HorizonPage::new(w, h);
+                match page.find(&orients) {
+                    Some(pl) => {
+                        trial.pages.push(page);
+                        found = Some((trial.pages.len() - 1, pl));
+                    }
+                    None => {
+                        let needed = orients
+                            .iter()
+                            .map(|o| [o.width_texels as u64, o.height_texels as u64])
+                            .min_by_key(|d| (d[0].max(d[1]), d[0] * d[1]))
+                            .unwrap_or([0, 0]);
+                        return Err(PackError::ChartTooLarge {
+                            chart: i,
+                            needed_texels: needed,
+                            page_texels: [w, h],
+                        });
+                    }
+                }
+            }
+            match found {
+                Some((p, pl)) => {
+                    let orient = &orients[pl.orientation];
+                    trial.pages[p].commit(orient, pl);
+                    trial.placed[i] = Some(Placed {
+                        page: p as u32,
+                        affine: orient.affine,
+                        x: pl.x,
+                        y: pl.y,
+                    });
+                }
+                None => {
+                    // This density fails; what is left tells the search how much to shrink.
+                    trial.unplaced += 1;
+                    trial.unplaced_area_m2 = self.prepared[i].area_m2
+                        + self
+                            .order
+                            .iter()
+                            .skip_while(|&&j| j != i)
+                            .skip(1)
+                            .map(|&j| self.prepared[j].area_m2)
+                            .sum::<f64>();
+                    break;
+                }
+            }
+        }
+        Ok(trial)
+    }
+
+    /// Normalized page UVs of a complete trial: each page's box is centred on the page.
+    fn output(&self, trial: &Trial) -> Packing {
+        let [w, h] = self.page();
+        let shifts: Vec<[i64; 2]> = trial
+            .pages
+            .iter()
+            .map(|p| match p.bbox() {
+                Some([x0, y0, x1, y1]) => [
+                    -i64::from(x0) + (i64::from(w) - i64::from(x1 - x0)) / 2,
+                    -i64::from(y0) + (i64::from(h) - i64::from(y1 - y0)) / 2,
+                ],
+                None => [0, 0],
+            })
+            .collect();
+        let charts = self
+            .charts
+            .iter()
+            .enumerate()
+            .map(|(i, chart)| match &trial.placed[i] {
+                None => PlacedChart {
+                    page: 0,
+                    uv: vec![[0.0, 0.0]; chart.uv.len()],
+                },
+                Some(pl) => {
+                    let s = shifts[pl.page as usize];
+                    let ox = (i64::from(pl.x) + s[0]) as f64;
+                    let oy = (i64::from(pl.y) + s[1]) as f64;
+                    let c = self.prepared[i].centre;
+                    let a = &pl.affine;
+                    let uv = chart
+                        .uv
+                        .iter()
+                        .map(|p| {
+                            let (x, y) = (p[0] - c[0], p[1] - c[1]);
+                            let qx = a[0][0] * x + a[0][1] * y + a[0][2] + ox;
+                            let qy = a[1][0] * x + a[1][1] * y + a[1][2] + oy;
+                            [unit(qx / f64::from(w)), unit(qy / f64::from(h))]
+                        })
+                        .collect();
+                    PlacedChart { page: pl.page, uv }
+                }
+            })
+            .collect();
+        Packing {
+            charts,
+            num_pages: trial.pages.len() as u32,
+            texels_per_unit: trial.texels_per_unit,
+        }
+    }
+}
+
+/// Clamps into \[0,1\] (only unreferenced vertices can be outside), NaN to 0.
+fn unit(v: f64) -> f64 {
+    if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(0.0, 1.0)
+    }
+}
+
+/// The largest density (within [`FIT_TOLERANCE`]) at which one page holds every chart: a
+/// search on log density: steps from the last trial's fill ratio until a density that fits and
+/// one that does not are known, then bisection. A failing trial stops at its first chart that
+/// does not fit, so it costs at most a full one. Deterministic; at most [`MAX_FIT_TRIALS`]
+/// trials (+1 last-resort trial at a density where every chart is below a texel).
+fn fit_to_page(
+    ctx: &Context<'_, '_>,
+    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
+) -> Result<Trial, PackError> {
+    let [w, h] = ctx.page();
+    let page_area = f64::from(w) * f64::from(h);
+    let mut progress = Progress::new(monitor, ctx.order.len() * (MAX_FIT_TRIALS + 1));
+    let total_area: f64 = ctx.order.iter().map(|&i| ctx.prepared[i].area_m2).sum();
+    let does_not_fit = || PackError::DoesNotFit {
+        charts: ctx.order.len(),
+        page_texels: [w, h],
+        padding_texels: ctx.options.padding_texels,
+    };
+    if !(total_area > 0.0) {
+        // Only degenerate charts: one texel each, any density.
+        let t = ctx.run(1.0, false, &mut progress)?;
+        progress.finish()?;
+        return if t.unplaced == 0 {
+            Ok(t)
+        } else {
+            Err(does_not_fit())
+        };
+    }
+    let clamp_d = |d: f64| d.clamp(1e-300, 1e300);
+    // Start where charts would cover 60% of the page.
+    let mut d = clamp_d((0.6 * page_area / total_area).sqrt());
+    let mut fit: Option<Trial> = None;
+    let mut no_fit: Option<f64> = None;
+    for _ in 0..MAX_FIT_TRIALS {
+        let t = ctx.run(d, false, &mut progress)?;
+        // How much the packing would have to shrink (> 1) or could grow (< 1).
+        let ratio = if t.unplaced == 0 {
+            let [x0, y0, x1, y1] = t.pages[0].bbox().unwrap_or([0, 0, 1, 1]);
+            (f64::from(x1 - x0) / f64::from(w)).max(f64::from(y1 - y0) / f64::from(h))
+        } else {
+            let placed = (total_area - t.unplaced_area_m2).max(total_area * 1e-6);
+            (total_area / placed)
+                .sqrt()
+                .max(t.worst_size_ratio)
+                .max(1.0 + FIT_TOLERANCE)
+        };
+        let fitted = t.unplaced == 0;
+        if fitted {
+            if fit.as_ref().is_none_or(|f| d > f.texels_per_unit) {
+                fit = Some(t);
+            }
+        } else if no_fit.is_none_or(|n| d < n) {
+            no_fit = Some(d);
+        }
+        let lo = fit.as_ref().map(|f| f.texels_per_unit);
+        if let (Some(lo), Some(hi)) = (lo, no_fit) {
+            if hi <= lo * (1.0 + FIT_TOLERANCE) {
+                break;
+            }
+        }
+        // Once bracketed, bisect (log scale); before, step by the fill ratio (a packing's size
+        // is about linear in density), growing by at least 5% while it fits.
+        let next = match (lo, no_fit) {
+            (Some(l), Some(n)) => (l * n).sqrt(),
+            _ if fitted => d / ratio.min(1.0 / 1.05),
+            _ => d / ratio,
+        };
+        d = clamp_d(next);
+    }
+    let t = match fit {
+        Some(t) => t,
+        None => {
+            // Last resort: a density at which every chart is below a texel.
+            let extent = ctx
+                .order
+                .iter()
+                .map(|&i| ctx.prepared[i].unit_scale * uv_extent(&ctx.charts[i]))
+                .fold(0.0, f64::max);
+            let tiny = if extent > 0.0 {
+                clamp_d(0.25 / extent)
+            } else {
+                1.0
+            };
+            let t = ctx.run(tiny, false, &mut progress)?;
+            if t.unplaced > 0 {
+                return Err(does_not_fit());
+            }
+            t
+        }
+    };
+    progress.finish()?;
+    Ok(t)
+}
+
+/// Largest side of the UV bounding box of a chart's referenced vertices, model units.
+fn uv_extent(chart: &PackChart<'_>) -> f64 {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for t in chart.triangles {
+        for &i in t {
+            let p = chart.uv[i as usize];
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+    }
+    if lo[0] > hi[0] {
+        0.0
+    } else {
+        (hi[0] - lo[0]).max(hi[1] - lo[1])
+    }
 }

@@ -47,7 +47,10 @@ use crate::mesh::{FaceData, FaceId, HalfedgeId, TriangleMesh, VertexId};
 pub use features::{detect_features, Features};
 pub use grow::{distance_to_features, grow_charts, GrownCharts};
 pub use options::{Lscm2002Options, SegmentMethod, SegmentOptions};
-pub use validate::{validate_charts, ChartDefect, LocatedMap, ValidateOptions, ValidatedCharts};
+pub use validate::{
+    validate_charts, validate_charts_with_monitor, ChartDefect, LocatedMap, ValidateOptions,
+    ValidatedCharts,
+};
 
 /// A chart of a [`Segmentation`], numbered by its lowest face id. Displayed as `C3`.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Debug)]
@@ -71,6 +74,9 @@ pub enum SegmentError {
         /// What is wrong and what to use instead.
         detail: String,
     },
+    /// The caller's monitor returned `Break`.
+    #[error("segmentation was cancelled")]
+    Cancelled,
 }
 
 /// Why a set of faces is not a topological disk ([`check_chart_is_disk`]).

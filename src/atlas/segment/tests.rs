@@ -2,6 +2,8 @@
 //! expected chart layouts (cube, sphere, torus), features and distances recomputed independently.
 use proptest::prelude::*;
 
+use std::ops::ControlFlow;
+
 use super::*;
 use crate::mesh::{fixtures, MeshInput};
 
@@ -665,19 +667,131 @@ fn validation_bounds_the_area_ratio() {
     }
 }
 
+/// Signed UV area of triangle `t`.
+fn uv_area(uv: &[[f64; 2]], t: [u32; 3]) -> f64 {
+    let [p, q, r] = t.map(|i| uv[i as usize]);
+    0.5 * ((q[0] - p[0]) * (r[1] - p[1]) - (r[0] - p[0]) * (q[1] - p[1]))
+}
+
+/// The `maps` contract of [`ValidatedCharts`]: every chart has a map, its vertex list is the
+/// chart's [`chart_mesh`] vertex list, UVs are finite, every non-degenerate face has a positive
+/// UV area and every zero-area face a UV area within rounding of 0 (relative to the chart's UV
+/// extent). Returns the number of zero-area faces seen.
+fn assert_maps_contract(mesh: &TriangleMesh, v: &ValidatedCharts) -> usize {
+    assert_eq!(v.maps.len(), v.segmentation.num_charts());
+    let mut zero_area = 0;
+    for (i, (c, m)) in v.segmentation.charts.iter().zip(&v.maps).enumerate() {
+        let (map, global) = m.as_ref().unwrap_or_else(|| panic!("chart {i} has no map"));
+        let (cm, expected) = chart_mesh(mesh, c);
+        assert_eq!(global, &expected, "chart {i}: vertex list");
+        assert_eq!(map.uv.len(), global.len(), "chart {i}: one UV per vertex");
+        assert!(map.uv.iter().flatten().all(|x| x.is_finite()));
+        assert!(map.flipped_faces.is_empty(), "chart {i}: flips");
+        let extent = map
+            .uv
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, x| m.max(x.abs()))
+            .max(1e-300);
+        for (k, &f) in c.iter().enumerate() {
+            let a = uv_area(&map.uv, cm.triangles[k]);
+            if mesh.face_degeneracy(f).is_some() {
+                zero_area += 1;
+                assert!(
+                    a.abs() <= 1e-9 * extent * extent,
+                    "chart {i} face {f:?}: {a}"
+                );
+            } else {
+                assert!(a > 0.0, "chart {i} face {f:?}: UV area {a}");
+            }
+        }
+    }
+    zero_area
+}
+
+/// A flat 4×4 grid (1 m cells) with two zero-area faces: one inside, closing a T-junction at
+/// the midpoint `m` of the edge (1,1)–(2,1) (without it the grid has a hole), and one on the
+/// bottom border, whose third vertex, at x = 2.25 m on the edge (2,0)–(3,0), no other face uses.
+fn grid_with_zero_area_faces() -> MeshInput {
+    let mut g = fixtures::grid(4, 4);
+    let id = |i: u32, j: u32| j * 5 + i;
+    let (a, b, c) = (id(1, 1), id(2, 1), id(2, 2));
+    let k = g
+        .triangles
+        .iter()
+        .position(|t| *t == [a, b, c])
+        .expect("grid triangle");
+    let m = g.positions_m.len() as u32;
+    g.positions_m.push([1.5, 1.0, 0.0]);
+    g.weld_group.push(0);
+    g.triangles[k] = [a, m, c];
+    g.triangles.push([m, b, c]);
+    g.triangles.push([a, b, m]);
+    let (p, q) = (id(2, 0), id(3, 0));
+    let e = g.positions_m.len() as u32;
+    g.positions_m.push([2.25, 0.0, 0.0]);
+    g.weld_group.push(0);
+    g.triangles.push([q, p, e]);
+    g
+}
+
 #[test]
-fn validation_reports_unparameterizable_charts_and_rejects_bad_ratio() {
+fn every_chart_gets_a_map_even_with_zero_area_faces() {
+    let mesh = build(&grid_with_zero_area_faces());
+    let interior = FaceId(mesh.num_faces() as u32 - 2);
+    let border = FaceId(mesh.num_faces() as u32 - 1);
+    assert!(mesh.face_degeneracy(interior).is_some() && mesh.face_degeneracy(border).is_some());
+    // The whole grid as one chart: a disk, but not without its inner zero-area face.
+    let all: Vec<FaceId> = mesh.faces().collect();
+    check_chart_is_disk(&mesh, &all).expect("premise: the whole grid is a disk");
+    let seg = finish(&mesh, vec![all], SegmentStats::default());
+    let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid");
+    assert_contract(&mesh, &v.segmentation);
+    assert_eq!(assert_maps_contract(&mesh, &v), 2);
+    assert_eq!(v.degenerate_faces, 2);
+    assert!(
+        v.degenerate_splits >= 1,
+        "the inner zero-area face forces a split"
+    );
+    assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
+    // The border vertex at x = 2.25 lies a quarter of the way along its edge in UV too.
+    let c = v.segmentation.face_chart[border].index();
+    let (map, global) = v.maps[c].as_ref().expect("map");
+    let uv_of = |x: [f64; 3]| {
+        let l = global
+            .iter()
+            .position(|&g| mesh.position(g) == x)
+            .expect("vertex in chart");
+        map.uv[l]
+    };
+    let (up, uq, ue) = (
+        uv_of([2.0, 0.0, 0.0]),
+        uv_of([3.0, 0.0, 0.0]),
+        uv_of([2.25, 0.0, 0.0]),
+    );
+    for k in 0..2 {
+        assert!(
+            (ue[k] - (0.75 * up[k] + 0.25 * uq[k])).abs() < 1e-9,
+            "{ue:?} {up:?} {uq:?}"
+        );
+    }
+    // Deterministic.
+    assert_eq!(
+        v,
+        validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid")
+    );
+}
+
+#[test]
+fn validation_maps_degenerate_fixture_charts_and_rejects_bad_ratio() {
     let mesh = build(&fixtures::degenerate());
     let seg = segment(&mesh);
     let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid");
     assert_contract(&mesh, &v.segmentation);
-    // Face 2 is zero-area: its chart cannot be flattened and is reported, not dropped.
-    let c2 = v.segmentation.face_chart[FaceId(2)].index();
-    assert!(v
-        .unresolved
-        .iter()
-        .any(|(c, d)| *c == c2 && matches!(d, ChartDefect::Unparameterizable(_))));
-    assert!(v.maps[c2].is_none());
+    // Face 2 is zero-area and glued to face 0; faces 3 and 4 repeat a vertex (isolated, all
+    // degenerate: the line map). All of them get maps, none is unresolved.
+    assert_eq!(assert_maps_contract(&mesh, &v), 3);
+    assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
     let bad = ValidateOptions {
         max_area_ratio: Some(0.5),
         ..Default::default()
@@ -689,4 +803,33 @@ fn validation_reports_unparameterizable_charts_and_rejects_bad_ratio() {
             ..
         })
     ));
+}
+
+#[test]
+fn the_monitor_sees_every_chart_and_can_cancel() {
+    let mesh = build(&fixtures::uv_sphere(16, 24, 1.0));
+    let seg = segment(&mesh);
+    let mut calls: Vec<(usize, usize)> = Vec::new();
+    let v = validate_charts_with_monitor(&mesh, &seg, &ValidateOptions::default(), &mut |p| {
+        calls.push(p);
+        ControlFlow::Continue(())
+    })
+    .expect("valid");
+    assert!(calls.len() >= seg.num_charts(), "{calls:?}");
+    assert!(calls.iter().all(|&(d, k)| d <= k), "{calls:?}");
+    assert_eq!(
+        v,
+        validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid"),
+        "the monitor does not change the result"
+    );
+    let mut n = 0;
+    let r = validate_charts_with_monitor(&mesh, &seg, &ValidateOptions::default(), &mut |_| {
+        n += 1;
+        if n > 1 {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    });
+    assert_eq!(r, Err(SegmentError::Cancelled));
 }

@@ -26,19 +26,43 @@
 //! Small charts are then merged back into a neighbour when the merged chart is still a disk and
 //! passes all three tests (one pass, smallest first, two neighbours tried each; see `merge_back`).
 //!
-//! Charts containing a zero-area face cannot be parameterized by LSCM (its `1/√d_T` weight is
-//! infinite); they are returned unsplit with [`ChartDefect::Unparameterizable`] so that the caller
-//! sees them rather than losing them.
+//! **Zero-area faces** (3-D degenerate: collinear corners or a repeated vertex,
+//! [`TriangleMesh::face_degeneracy`]) cannot be flattened by LSCM (their `1/√d_T` weight is
+//! infinite), yet every chart gets a map (the `maps` contract of [`ValidatedCharts`]):
+//! - the chart is flattened **without its zero-area faces**, and every vertex only they use gets
+//!   a UV from its face's two mapped corners — the point of their UV segment at the vertex's 3-D
+//!   position projected on the 3-D segment — or, when no face has two mapped corners, the UV of a
+//!   mapped corner. A zero-area face therefore maps to a (near-)degenerate UV triangle, as it is in
+//!   3-D; it is never listed in `flipped_faces` (it has no orientation) and takes no part in the
+//!   overlap and area tests. The chart itself, zero-area faces included, stays a disk;
+//! - when the chart without its zero-area faces is not a disk (a zero-area face inside the chart,
+//!   or one joining two parts), the non-degenerate faces are cut into disks first, and each glued
+//!   group of zero-area faces joins the first neighbouring part with which it is still a disk, or
+//!   else becomes a chart of its own;
+//! - a chart made only of zero-area faces gets the **line map**: every vertex projected on the
+//!   line through its first and its farthest vertex (`v = 0`).
+//!
+//! A chart the parameterizer rejects for another reason (e.g. a failed factorization) is split
+//! by diameter; a single face that still fails keeps the line map and is listed in
+//! `unresolved` as [`ChartDefect::Unparameterizable`]. So no chart is ever left without a map.
+//!
+//! Charts of one round are flattened in parallel (rayon) and the results consumed in chart
+//! order; the splits of a chart depend only on that chart, so the result does not depend on the
+//! thread count or on the processing order.
 //!
 //! Units: area ratios are plain ratios (model area per UV area, divided by its minimum over the
 //! chart); UVs in model units, as the parameterizer returns them.
 //!
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.3 (area-ratio threshold 2).
+use std::ops::ControlFlow;
+
+use rayon::prelude::*;
+
 use crate::atlas::parameterize::{
-    parameterize_chart, ChartMap, ParameterizeError, ParameterizeOptions,
+    parameterize_chart, ChartMap, ParameterizeError, ParameterizeMethod, ParameterizeOptions,
 };
-use crate::mesh::{FaceId, TriangleMesh};
+use crate::mesh::{FaceId, TriangleMesh, VertexId};
 
 use super::{
     chart_mesh, disk_check, enforce_disks, finish, grow_two, SegmentError, SegmentStats,
@@ -99,25 +123,55 @@ pub type LocatedMap = (ChartMap, Vec<crate::mesh::VertexId>);
 pub struct ValidatedCharts {
     /// The final charts (each a disk; see [`Segmentation`]).
     pub segmentation: Segmentation,
-    /// The map of each chart (same order as `segmentation.charts`), with the local → global
-    /// vertex map of [`chart_mesh`]; `None` for a chart that could not be parameterized.
+    /// The map of each chart (same order as `segmentation.charts`). **Contract:** every entry is
+    /// `Some`, and its vertex list is exactly `chart_mesh(mesh, &segmentation.charts[i]).1`, so
+    /// it covers every vertex of the chart's faces and `uv[l]` is the UV of the chart-local
+    /// vertex `l` of [`chart_mesh`]'s triangles. (`Option` is kept for the stable type; `None`
+    /// is never returned.) Zero-area faces map to (near-)degenerate UV triangles (module doc).
     pub maps: Vec<Option<LocatedMap>>,
-    /// Charts returned although not valid: chart index and why.
+    /// Charts returned although not valid: chart index and why. Such a chart still has a map
+    /// (a single face that failed to flatten gets the fallback line map of the module doc).
     pub unresolved: Vec<(usize, ChartDefect)>,
     /// Splits made, by cause: flips, overlaps, area ratio.
     pub splits: [usize; 3],
+    /// Splits made because a chart without its zero-area faces was not a disk, or because the
+    /// parameterizer failed on it (split by diameter).
+    pub degenerate_splits: usize,
+    /// Zero-area (or repeated-vertex) faces in the mesh, left out of every flattening and
+    /// mapped from their neighbours' UVs.
+    pub degenerate_faces: usize,
     /// Small charts merged back into a neighbour after splitting.
     pub merges: usize,
 }
 
 /// Parameterizes every chart of `seg` and splits invalid ones until all are valid (module doc).
 ///
-/// Errors: [`SegmentError::InvalidOption`] for an area ratio below 1 or not finite.
-/// Cost: one parameterization per chart, plus one per part after each split.
+/// Equivalent to [`validate_charts_with_monitor`] with a monitor that never cancels.
 pub fn validate_charts(
     mesh: &TriangleMesh,
     seg: &Segmentation,
     options: &ValidateOptions,
+) -> Result<ValidatedCharts, SegmentError> {
+    validate_charts_with_monitor(mesh, seg, options, &mut |_| ControlFlow::Continue(()))
+}
+
+/// [`validate_charts`] with a progress monitor.
+///
+/// `monitor((done, known))` is called between charts, with the number of charts finished so far
+/// and the number of charts known so far (finished, queued, and parts of splits; it grows as
+/// charts are split, and falls as merge-back removes charts). Returning `Break` stops the work
+/// and returns [`SegmentError::Cancelled`]. The monitor does not change the result.
+///
+/// Errors: [`SegmentError::InvalidOption`] for an area ratio below 1 or not finite;
+/// [`SegmentError::Cancelled`].
+/// Cost: one parameterization per chart, plus one per part after each split, plus one per
+/// merge-back try. Charts of one round are flattened in parallel (rayon); results are consumed
+/// in chart order, so the output does not depend on the thread count.
+pub fn validate_charts_with_monitor(
+    mesh: &TriangleMesh,
+    seg: &Segmentation,
+    options: &ValidateOptions,
+    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
 ) -> Result<ValidatedCharts, SegmentError> {
     if let Some(r) = options.max_area_ratio {
         if !(r >= 1.0 && r.is_finite()) {
@@ -128,92 +182,88 @@ pub fn validate_charts(
         }
     }
     let mut stats: SegmentStats = seg.stats;
-    let mut pending: Vec<Vec<FaceId>> = seg.charts.iter().rev().cloned().collect();
-    let mut done: Vec<(Vec<FaceId>, Option<LocatedMap>)> = Vec::new();
+    let mut pending: Vec<Vec<FaceId>> = seg.charts.clone();
+    let mut done: Vec<(Vec<FaceId>, LocatedMap)> = Vec::new();
     let mut unresolved_faces: Vec<(FaceId, ChartDefect)> = Vec::new();
     let mut splits = [0usize; 3];
+    let mut degenerate_splits = 0usize;
     let mut label = vec![u32::MAX; mesh.num_faces()];
     let mut next_label = 0u32;
     let max_splits = mesh.num_faces();
-    while let Some(faces) = pending.pop() {
-        let (cm, global) = chart_mesh(mesh, &faces);
-        let map = match parameterize_chart(&cm, &options.parameterize) {
-            Ok(m) => m,
-            Err(e) => {
-                unresolved_faces.push((faces[0], ChartDefect::Unparameterizable(e)));
-                done.push((faces, None));
+    // Rounds: flatten every pending chart (in parallel), then, in chart order, keep the valid
+    // ones and split the others into the next round's charts.
+    while !pending.is_empty() {
+        for faces in &mut pending {
+            faces.sort_unstable();
+        }
+        let outcomes: Vec<Attempt> = pending
+            .par_iter()
+            .map(|faces| flatten_chart(mesh, faces, options))
+            .collect();
+        let round = pending.len();
+        let mut next: Vec<Vec<FaceId>> = Vec::new();
+        for (k, (faces, outcome)) in pending.into_iter().zip(outcomes).enumerate() {
+            if monitor((done.len(), done.len() + round - k + next.len())).is_break() {
+                return Err(SegmentError::Cancelled);
+            }
+            let budget_left = splits.iter().sum::<usize>() + degenerate_splits < max_splits;
+            let (map, defect) = match outcome {
+                Attempt::Mapped { map, defect } => (Some(map), defect),
+                Attempt::NotADiskWithoutDegenerate => {
+                    if budget_left {
+                        degenerate_splits += 1;
+                        next.extend(split_off_degenerate(
+                            mesh,
+                            &faces,
+                            &mut label,
+                            &mut next_label,
+                            &mut stats,
+                        ));
+                        continue;
+                    }
+                    (None, None)
+                }
+                Attempt::Failed(e) => (None, Some(ChartDefect::Unparameterizable(e))),
+            };
+            let Some(defect) = defect else {
+                // Valid, or (never seen) a degenerate split past the budget: a fallback map.
+                let map = map.unwrap_or_else(|| line_map(mesh, &faces));
+                done.push((faces, map));
                 continue;
-            }
-        };
-        let defect = find_defect(&faces, &cm, &map, options);
-        let Some(defect) = defect else {
-            done.push((faces, Some((map, global))));
-            continue;
-        };
-        if faces.len() < 2 || splits.iter().sum::<usize>() >= max_splits {
-            unresolved_faces.push((faces[0], defect));
-            done.push((faces, Some((map, global))));
-            continue;
-        }
-        next_label += 1;
-        let id = next_label;
-        for f in &faces {
-            label[f.index()] = id;
-        }
-        let inside = |f: FaceId| label[f.index()] == id;
-        let (a, b, cause) = match &defect {
-            ChartDefect::Flipped { .. } => {
-                let a = *super::flood(mesh, &faces[..1], &inside)
-                    .last()
-                    .unwrap_or(&faces[0]);
-                let b = *super::flood(mesh, &[a], &inside).last().unwrap_or(&a);
-                (a, b, 0)
-            }
-            ChartDefect::BoundaryOverlap { faces: [a, b] } => (*a, *b, 1),
-            ChartDefect::AreaRatio {
-                min_face, max_face, ..
-            } => (*min_face, *max_face, 2),
-            ChartDefect::Unparameterizable(_) => {
-                // Not produced by `find_defect`; kept whole if it ever were.
-                unresolved_faces.push((faces[0], defect.clone()));
-                done.push((faces, Some((map, global))));
+            };
+            let parts = if faces.len() >= 2 && budget_left {
+                split_for(mesh, &faces, &defect, &mut label, &mut next_label)
+            } else {
+                None
+            };
+            let Some((pa, pb, cause)) = parts else {
+                // Cannot split (one face, or the split budget is spent): keep it, with a map.
+                unresolved_faces.push((faces[0], defect));
+                let map = map.unwrap_or_else(|| line_map(mesh, &faces));
+                done.push((faces, map));
                 continue;
+            };
+            if let Some(cause) = cause {
+                splits[cause] += 1;
+            } else {
+                degenerate_splits += 1;
             }
-        };
-        let (mut pa, mut pb) = grow_two(mesh, &faces, &inside, a, b);
-        if pb.is_empty() {
-            // Both seeds in one face (an overlap within one face's edges): split by diameter.
-            let a = *super::flood(mesh, &faces[..1], &inside)
-                .last()
-                .unwrap_or(&faces[0]);
-            let b = *super::flood(mesh, &[a], &inside).last().unwrap_or(&a);
-            (pa, pb) = grow_two(mesh, &faces, &inside, a, b);
+            for part in enforce_disks(mesh, vec![pa, pb], &mut stats) {
+                debug_assert!(disk_check(mesh, &part, &|f| part.binary_search(&f).is_ok()).is_ok());
+                next.push(part);
+            }
         }
-        if pb.is_empty() {
-            unresolved_faces.push((faces[0], defect));
-            done.push((faces, Some((map, global))));
-            continue;
-        }
-        splits[cause] += 1;
-        for part in enforce_disks(mesh, vec![pa, pb], &mut stats)
-            .into_iter()
-            .rev()
-        {
-            debug_assert!(disk_check(mesh, &part, &|f| part.binary_search(&f).is_ok()).is_ok());
-            pending.push(part);
-        }
+        pending = next;
     }
     let merges = if splits.iter().sum::<usize>() > 0 {
         let unresolved: std::collections::BTreeSet<FaceId> =
             unresolved_faces.iter().map(|(f, _)| *f).collect();
-        merge_back(mesh, &mut done, &unresolved, options)
+        merge_back(mesh, &mut done, &unresolved, options, monitor)?
     } else {
         0
     };
-    // Order by lowest face like `segment_charts`, keeping maps aligned.
-    for (faces, _) in &mut done {
-        faces.sort_unstable();
-    }
+    // Order by lowest face like `segment_charts`, keeping maps aligned. Every chart's faces are
+    // already ascending, and its map is in `chart_mesh` order of those faces.
     done.sort_by_key(|(faces, _)| faces[0]);
     let charts: Vec<Vec<FaceId>> = done.iter().map(|(f, _)| f.clone()).collect();
     let segmentation = finish(mesh, charts, stats);
@@ -221,13 +271,336 @@ pub fn validate_charts(
         .into_iter()
         .map(|(f, d)| (segmentation.face_chart[f].index(), d))
         .collect();
+    let degenerate_faces = mesh
+        .faces()
+        .filter(|&f| mesh.face_degeneracy(f).is_some())
+        .count();
     Ok(ValidatedCharts {
         segmentation,
-        maps: done.into_iter().map(|(_, m)| m).collect(),
+        maps: done.into_iter().map(|(_, m)| Some(m)).collect(),
         unresolved,
         splits,
+        degenerate_splits,
+        degenerate_faces,
         merges,
     })
+}
+
+/// What flattening one chart gave.
+enum Attempt {
+    /// A map of the whole chart (in [`chart_mesh`] order of its ascending faces) and the first
+    /// defect of its non-degenerate part, if any.
+    Mapped {
+        map: LocatedMap,
+        defect: Option<ChartDefect>,
+    },
+    /// The chart without its zero-area faces is not a disk (a zero-area face inside it, or one
+    /// joining two parts): it must be split first (`split_off_degenerate`).
+    NotADiskWithoutDegenerate,
+    /// The parameterizer failed for another reason (e.g. a failed factorization).
+    Failed(ParameterizeError),
+}
+
+/// True when `f` has (numerically) zero area or repeats a vertex: LSCM's `1/√d_T` weight is
+/// infinite there, so it is left out of the flattening (module doc, "zero-area faces").
+fn is_degenerate(mesh: &TriangleMesh, f: FaceId) -> bool {
+    mesh.face_degeneracy(f).is_some()
+}
+
+/// Flattens the chart `faces` (ascending) without its zero-area faces, then gives the vertices
+/// only those faces use UVs from the map (`extend_map`). Pure; called in parallel.
+fn flatten_chart(mesh: &TriangleMesh, faces: &[FaceId], options: &ValidateOptions) -> Attempt {
+    let mut dropped: Vec<bool> = faces.iter().map(|&f| is_degenerate(mesh, f)).collect();
+    // Each retry drops one more face (the parameterizer's own zero-area test may disagree with
+    // the mesh's by rounding), so this runs at most `faces.len() + 1` times.
+    loop {
+        let kept: Vec<FaceId> = faces
+            .iter()
+            .zip(&dropped)
+            .filter(|(_, &d)| !d)
+            .map(|(&f, _)| f)
+            .collect();
+        if kept.is_empty() {
+            return Attempt::Mapped {
+                map: line_map(mesh, faces),
+                defect: None,
+            };
+        }
+        if kept.len() < faces.len()
+            && disk_check(mesh, &kept, &|f| kept.binary_search(&f).is_ok()).is_err()
+        {
+            return Attempt::NotADiskWithoutDegenerate;
+        }
+        let (cm, global) = chart_mesh(mesh, &kept);
+        match parameterize_chart(&cm, &options.parameterize) {
+            Ok(map) => {
+                let defect = find_defect(&kept, &cm, &map, options);
+                let map = if kept.len() == faces.len() {
+                    (map, global)
+                } else {
+                    extend_map(mesh, faces, &dropped, map, &global)
+                };
+                return Attempt::Mapped { map, defect };
+            }
+            Err(ParameterizeError::DegenerateTriangle { triangle }) => {
+                let f = kept[triangle as usize];
+                let i = faces.binary_search(&f).unwrap_or(0);
+                if dropped[i] {
+                    return Attempt::Failed(ParameterizeError::DegenerateTriangle { triangle });
+                }
+                dropped[i] = true;
+            }
+            Err(e) => return Attempt::Failed(e),
+        }
+    }
+}
+
+/// The map of the whole chart `faces` from the map `sub` of its non-dropped faces (local
+/// vertices `sub_global`): UVs are copied by global vertex; a vertex used only by dropped faces
+/// gets, from a dropped face with two mapped corners `a`, `b`, the UV on the line through theirs
+/// at its own 3-D position projected on `ab` (a zero-area face has collinear corners, so its UV
+/// triangle is degenerate too), or else the UV of a mapped corner. `flipped_faces` and `pins`
+/// are renumbered into the whole chart; dropped faces are never listed as flipped (they have no
+/// orientation).
+fn extend_map(
+    mesh: &TriangleMesh,
+    faces: &[FaceId],
+    dropped: &[bool],
+    sub: ChartMap,
+    sub_global: &[VertexId],
+) -> LocatedMap {
+    let (cm, global) = chart_mesh(mesh, faces);
+    let mut by_vertex: Vec<(VertexId, u32)> = global
+        .iter()
+        .enumerate()
+        .map(|(l, &v)| (v, l as u32))
+        .collect();
+    by_vertex.sort_unstable();
+    let local_of = |v: VertexId| {
+        by_vertex
+            .binary_search_by_key(&v, |&(g, _)| g)
+            .map(|k| by_vertex[k].1)
+            .unwrap_or(0)
+    };
+    let mut uv: Vec<Option<[f64; 2]>> = vec![None; global.len()];
+    for (s, &v) in sub_global.iter().enumerate() {
+        uv[local_of(v) as usize] = Some(sub.uv[s]);
+    }
+    let dropped_tris: Vec<usize> = (0..faces.len()).filter(|&k| dropped[k]).collect();
+    // Each round maps at least one more vertex (or stops), so at most V rounds; the chart is
+    // connected, so every vertex is reached. Interpolation is preferred; one copy is made only
+    // when no interpolation is possible.
+    loop {
+        let mut progress = false;
+        for &k in &dropped_tris {
+            let t = cm.triangles[k];
+            let known: Vec<u32> = t
+                .iter()
+                .copied()
+                .filter(|&i| uv[i as usize].is_some())
+                .collect();
+            if known.len() != 2 {
+                continue;
+            }
+            let Some(&p) = t.iter().find(|&&i| uv[i as usize].is_none()) else {
+                continue;
+            };
+            let (ua, ub) = (
+                uv[known[0] as usize].unwrap_or_default(),
+                uv[known[1] as usize].unwrap_or_default(),
+            );
+            let [pa, pb, pp] = [known[0], known[1], p].map(|i| cm.positions_m[i as usize]);
+            let ab = [0, 1, 2].map(|c| pb[c] - pa[c]);
+            let ap = [0, 1, 2].map(|c| pp[c] - pa[c]);
+            let len2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+            let s = if len2 > 0.0 {
+                (ab[0] * ap[0] + ab[1] * ap[1] + ab[2] * ap[2]) / len2
+            } else {
+                0.0
+            };
+            uv[p as usize] = Some([ua[0] + s * (ub[0] - ua[0]), ua[1] + s * (ub[1] - ua[1])]);
+            progress = true;
+        }
+        if progress {
+            continue;
+        }
+        'copy: for &k in &dropped_tris {
+            let t = cm.triangles[k];
+            if let Some(&a) = t.iter().find(|&&i| uv[i as usize].is_some()) {
+                if let Some(&p) = t.iter().find(|&&i| uv[i as usize].is_none()) {
+                    uv[p as usize] = uv[a as usize];
+                    progress = true;
+                    break 'copy;
+                }
+            }
+        }
+        if !progress {
+            break;
+        }
+    }
+    let uv: Vec<[f64; 2]> = uv.into_iter().map(Option::unwrap_or_default).collect();
+    let kept_index: Vec<usize> = (0..faces.len()).filter(|&k| !dropped[k]).collect();
+    let flipped_faces = sub
+        .flipped_faces
+        .iter()
+        .map(|&t| kept_index[t as usize] as u32)
+        .collect();
+    let pins = sub.pins.map(|p| local_of(sub_global[p as usize]));
+    (
+        ChartMap {
+            uv,
+            conformal_energy: sub.conformal_energy,
+            flipped_faces,
+            method_used: sub.method_used,
+            iterations: sub.iterations,
+            pins,
+            hlscm: sub.hlscm,
+        },
+        global,
+    )
+}
+
+/// The map of a chart whose faces all have zero area (or, as a last resort, of a chart the
+/// parameterizer rejected and that cannot be split): every vertex is projected on the line
+/// through the chart's first vertex and its farthest vertex, `u` = signed distance in model
+/// units along it, `v = 0`. Every UV triangle is degenerate, as the 3-D faces are; no face is
+/// listed as flipped. `method_used` is `Direct`, `iterations` 0, `conformal_energy` 0.
+fn line_map(mesh: &TriangleMesh, faces: &[FaceId]) -> LocatedMap {
+    let (cm, global) = chart_mesh(mesh, faces);
+    let o = cm.positions_m[0];
+    let d = |p: [f64; 3]| [p[0] - o[0], p[1] - o[1], p[2] - o[2]];
+    let mut far = (0usize, 0.0f64);
+    for (i, &p) in cm.positions_m.iter().enumerate() {
+        let v = d(p);
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        if n > far.1 {
+            far = (i, n);
+        }
+    }
+    let dir = if far.1 > 0.0 {
+        d(cm.positions_m[far.0]).map(|c| c / far.1)
+    } else {
+        [1.0, 0.0, 0.0]
+    };
+    let uv = cm
+        .positions_m
+        .iter()
+        .map(|&p| {
+            let v = d(p);
+            [v[0] * dir[0] + v[1] * dir[1] + v[2] * dir[2], 0.0]
+        })
+        .collect();
+    (
+        ChartMap {
+            uv,
+            conformal_energy: 0.0,
+            flipped_faces: Vec::new(),
+            method_used: ParameterizeMethod::Direct,
+            iterations: 0,
+            pins: [0, far.0 as u32],
+            hlscm: None,
+        },
+        global,
+    )
+}
+
+/// The two parts a chart with `defect` is split into, and the `splits` index of the cause
+/// (`None` for a parameterizer failure, split by diameter); `None` when no split is possible.
+fn split_for(
+    mesh: &TriangleMesh,
+    faces: &[FaceId],
+    defect: &ChartDefect,
+    label: &mut [u32],
+    next_label: &mut u32,
+) -> Option<(Vec<FaceId>, Vec<FaceId>, Option<usize>)> {
+    *next_label += 1;
+    let id = *next_label;
+    for f in faces {
+        label[f.index()] = id;
+    }
+    let inside = |f: FaceId| label[f.index()] == id;
+    let diameter = || {
+        let a = *super::flood(mesh, &faces[..1], &inside)
+            .last()
+            .unwrap_or(&faces[0]);
+        let b = *super::flood(mesh, &[a], &inside).last().unwrap_or(&a);
+        (a, b)
+    };
+    let (a, b, cause) = match defect {
+        ChartDefect::Flipped { .. } => {
+            let (a, b) = diameter();
+            (a, b, Some(0))
+        }
+        ChartDefect::BoundaryOverlap { faces: [a, b] } => (*a, *b, Some(1)),
+        ChartDefect::AreaRatio {
+            min_face, max_face, ..
+        } => (*min_face, *max_face, Some(2)),
+        ChartDefect::Unparameterizable(_) => {
+            let (a, b) = diameter();
+            (a, b, None)
+        }
+    };
+    let (mut pa, mut pb) = grow_two(mesh, faces, &inside, a, b);
+    if pb.is_empty() {
+        // Both seeds in one face (an overlap within one face's edges): split by diameter.
+        let (a, b) = diameter();
+        (pa, pb) = grow_two(mesh, faces, &inside, a, b);
+    }
+    (!pb.is_empty()).then_some((pa, pb, cause))
+}
+
+/// Splits a chart whose non-degenerate faces do not form a disk: those faces are cut into disks
+/// (the disk guarantee), the zero-area faces into glued disk components of their own, and each
+/// such component joins the first neighbouring part (ascending label) with which it is still a
+/// disk. Every part's non-degenerate faces are then a disk (or empty), so each part flattens.
+fn split_off_degenerate(
+    mesh: &TriangleMesh,
+    faces: &[FaceId],
+    label: &mut [u32],
+    next_label: &mut u32,
+    stats: &mut SegmentStats,
+) -> Vec<Vec<FaceId>> {
+    let (bad, good): (Vec<FaceId>, Vec<FaceId>) =
+        faces.iter().partition(|&&f| is_degenerate(mesh, f));
+    let mut parts = enforce_disks(mesh, vec![good], stats);
+    let base = *next_label + 1;
+    for (i, p) in parts.iter().enumerate() {
+        for f in p {
+            label[f.index()] = base + i as u32;
+        }
+    }
+    *next_label = base + parts.len() as u32;
+    for d in enforce_disks(mesh, vec![bad], stats) {
+        let mut nbrs: Vec<u32> = d
+            .iter()
+            .flat_map(|&f| mesh.face_neighbors(f))
+            .flatten()
+            .map(|g| label[g.index()])
+            .filter(|&l| l >= base && l < *next_label)
+            .collect();
+        nbrs.sort_unstable();
+        nbrs.dedup();
+        let mut joined = false;
+        for l in nbrs {
+            let i = (l - base) as usize;
+            let mut union = parts[i].clone();
+            union.extend_from_slice(&d);
+            union.sort_unstable();
+            let inside = |f: FaceId| union.binary_search(&f).is_ok();
+            if disk_check(mesh, &union, &inside).is_ok() {
+                for f in &d {
+                    label[f.index()] = l;
+                }
+                parts[i] = union;
+                joined = true;
+                break;
+            }
+        }
+        if !joined {
+            parts.push(d);
+        }
+    }
+    parts
 }
 
 /// Merges small valid charts back into a neighbour when the merged chart is still a disk and
@@ -236,14 +609,15 @@ pub fn validate_charts(
 /// most edges are tried. Returns the number of merges. Cost: one parameterization per try.
 fn merge_back(
     mesh: &TriangleMesh,
-    done: &mut Vec<(Vec<FaceId>, Option<LocatedMap>)>,
+    done: &mut Vec<(Vec<FaceId>, LocatedMap)>,
     unresolved: &std::collections::BTreeSet<FaceId>,
     options: &ValidateOptions,
-) -> usize {
+    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
+) -> Result<usize, SegmentError> {
     const TRIES: usize = 2;
     let valid: Vec<bool> = done
         .iter()
-        .map(|(f, m)| m.is_some() && !unresolved.contains(&f[0]))
+        .map(|(f, _)| !unresolved.contains(&f[0]))
         .collect();
     let mut label = vec![u32::MAX; mesh.num_faces()];
     for (i, (faces, _)) in done.iter().enumerate() {
@@ -274,8 +648,13 @@ fn merge_back(
         nbrs.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.cmp(&y.1)));
         for &(_, j) in nbrs.iter().take(TRIES) {
             let j = j as usize;
+            let known = done.len() - merges;
+            if monitor((known, known)).is_break() {
+                return Err(SegmentError::Cancelled);
+            }
             let mut union = done[j].0.clone();
             union.extend_from_slice(&done[i].0);
+            union.sort_unstable();
             let (ci, cj) = (i as u32, j as u32);
             let inside = |f: FaceId| {
                 let l = label[f.index()];
@@ -284,24 +663,20 @@ fn merge_back(
             if disk_check(mesh, &union, &inside).is_err() {
                 continue;
             }
-            let (cm, global) = chart_mesh(mesh, &union);
-            let Ok(map) = parameterize_chart(&cm, &options.parameterize) else {
+            let Attempt::Mapped { map, defect: None } = flatten_chart(mesh, &union, options) else {
                 continue;
             };
-            if find_defect(&union, &cm, &map, options).is_some() {
-                continue;
-            }
             for f in &done[i].0 {
                 label[f.index()] = cj;
             }
-            done[j] = (union, Some((map, global)));
+            done[j] = (union, map);
             done[i].0.clear();
             merges += 1;
             break;
         }
     }
     done.retain(|(f, _)| !f.is_empty());
-    merges
+    Ok(merges)
 }
 
 /// The first defect of a chart's map, in the order flips, boundary overlap, area ratio.

@@ -1,0 +1,264 @@
+//! Charts, seams and boundaries recomputed from the output (the evaluator's connectivity).
+//!
+//! A corner's key is (glTF mesh, 3-D position, page, UV), exact bits with `-0.0 == 0.0`. Two
+//! faces are connected when they have a half-edge with the same unordered pair of corner keys;
+//! charts are the connected components, numbered by lowest face. The page is part of the key so
+//! that a chart never spans pages; with one page this is exactly the evaluator's rule.
+//!
+//! Seams: a half-edge whose corner-key pair no other half-edge has is a chart-boundary
+//! half-edge (when its two ends are distinct positions); it is a *seam* half-edge when another
+//! half-edge joins the same two (mesh, position) points, else an open border.
+//!
+//! Cost: O(faces) — one sort over the vertices (not the corners), then counting sorts into
+//! per-vertex and per-corner buckets, each bucket sorted on its own (a handful of entries).
+use super::numpy::np_sum;
+use crate::mesh::{FaceId, TriangleMesh, VertexId};
+
+/// Connectivity results.
+pub(super) struct Connectivity {
+    /// Chart of each face, charts numbered by lowest face.
+    pub chart_of_face: Vec<u32>,
+    /// Number of charts.
+    pub num_charts: usize,
+    /// Distinct corner keys.
+    pub unique_corners: usize,
+    /// Distinct cut 3-D edges.
+    pub seam_edges: usize,
+    /// Their total 3-D length, each once.
+    pub seam_length_3d_m: f64,
+    /// 3-D length of all chart-boundary half-edges.
+    pub boundary_length_3d_m: f64,
+    /// 3-D length of the boundary half-edges that are open mesh borders.
+    pub open_border_length_3d_m: f64,
+}
+
+/// Bit pattern with `-0.0` folded onto `0.0`, as a signed integer: position ids are then
+/// numbered in the evaluator's order (it sorts the `int64` views of the bits), so that sums
+/// over seams run in the same order.
+fn fold64(x: f64) -> i64 {
+    if x == 0.0 {
+        0
+    } else {
+        x.to_bits() as i64
+    }
+}
+
+fn fold32(x: f32) -> u32 {
+    if x == 0.0 {
+        0
+    } else {
+        x.to_bits()
+    }
+}
+
+/// Stable counting sort of `0..keys.len()` by `keys[i] < num_buckets`: returns the bucket
+/// offsets (`num_buckets + 1`) and the item order.
+fn bucket_order(num_buckets: usize, keys: &[u32]) -> (Vec<u32>, Vec<u32>) {
+    let mut offsets = vec![0u32; num_buckets + 1];
+    for &k in keys {
+        offsets[k as usize + 1] += 1;
+    }
+    for i in 0..num_buckets {
+        offsets[i + 1] += offsets[i];
+    }
+    let mut next = offsets.clone();
+    let mut order = vec![0u32; keys.len()];
+    for (i, &k) in keys.iter().enumerate() {
+        order[next[k as usize] as usize] = i as u32;
+        next[k as usize] += 1;
+    }
+    (offsets, order)
+}
+
+fn find(parent: &mut [u32], mut x: u32) -> u32 {
+    while parent[x as usize] != x {
+        let p = parent[x as usize];
+        parent[x as usize] = parent[p as usize];
+        x = p;
+    }
+    x
+}
+
+fn union(parent: &mut [u32], a: u32, b: u32) {
+    let (ra, rb) = (find(parent, a), find(parent, b));
+    // The smaller root wins, so every root is its component's lowest face.
+    if ra < rb {
+        parent[rb as usize] = ra;
+    } else if rb < ra {
+        parent[ra as usize] = rb;
+    }
+}
+
+/// Computes charts, corner count, seams and boundary lengths. `edge_len_m[f][k]` is the 3-D
+/// length of half-edge `k → k+1` of face `f`.
+pub(super) fn connectivity(
+    mesh: &TriangleMesh,
+    corner_uvs: &[[[f32; 2]; 3]],
+    face_page: &[u32],
+    edge_len_m: &[[f64; 3]],
+) -> Connectivity {
+    let nf = mesh.num_faces();
+    // 1. Position ids (glTF mesh + position bits), per mesh vertex: one sort over the vertices.
+    let nv = mesh.num_vertices();
+    let mut vkeys: Vec<(u32, [i64; 3], u32)> = (0..nv as u32)
+        .map(|v| {
+            let vid = VertexId(v);
+            let p = mesh.position(vid);
+            (
+                mesh.vertex_weld_group(vid),
+                [fold64(p[0]), fold64(p[1]), fold64(p[2])],
+                v,
+            )
+        })
+        .collect();
+    vkeys.sort_unstable();
+    let mut pid_of_vertex = vec![0u32; nv];
+    let mut num_pids = 0u32;
+    for i in 0..nv {
+        if i > 0 && (vkeys[i].0, vkeys[i].1) != (vkeys[i - 1].0, vkeys[i - 1].1) {
+            num_pids += 1;
+        }
+        pid_of_vertex[vkeys[i].2 as usize] = num_pids;
+    }
+    let num_pids = if nv == 0 { 0 } else { num_pids as usize + 1 };
+    drop(vkeys);
+
+    // 2. Corner ids: bucket corners by position id, then sort each bucket by (page, u, v).
+    let corner_pid: Vec<u32> = (0..nf)
+        .flat_map(|f| {
+            mesh.face_vertices(FaceId(f as u32))
+                .map(|v| pid_of_vertex[v.index()])
+        })
+        .collect();
+    let (offsets, mut order) = bucket_order(num_pids, &corner_pid);
+    let corner_key = |c: u32| {
+        let (f, k) = (c as usize / 3, c as usize % 3);
+        let uv = corner_uvs[f][k];
+        (face_page[f], fold32(uv[0]), fold32(uv[1]), c)
+    };
+    let mut corner_id = vec![0u32; 3 * nf];
+    let mut num_cids = 0u32;
+    for b in 0..num_pids {
+        let bucket = &mut order[offsets[b] as usize..offsets[b + 1] as usize];
+        bucket.sort_unstable_by_key(|&c| corner_key(c));
+        let mut prev = None;
+        for &c in bucket.iter() {
+            let (page, u, v, _) = corner_key(c);
+            if prev.is_some() && prev != Some((page, u, v)) {
+                num_cids += 1;
+            }
+            prev = Some((page, u, v));
+            corner_id[c as usize] = num_cids;
+        }
+        if prev.is_some() {
+            num_cids += 1;
+        }
+    }
+    let num_cids = num_cids as usize;
+    drop(order);
+
+    // 3. Half-edge e = 3f + k runs from corner k to corner k+1 of face f. Group by unordered
+    //    corner-id pair: bucket by the lower id, sort each bucket by the higher.
+    let ends = |ids: &[u32], e: usize| {
+        let (f, k) = (e / 3, e % 3);
+        let (a, b) = (ids[3 * f + k], ids[3 * f + (k + 1) % 3]);
+        (a.min(b), a.max(b))
+    };
+    let lo: Vec<u32> = (0..3 * nf).map(|e| ends(&corner_id, e).0).collect();
+    let (offsets, mut order) = bucket_order(num_cids, &lo);
+    drop(lo);
+    let mut parent: Vec<u32> = (0..nf as u32).collect();
+    let mut uv_edge_unique = vec![false; 3 * nf];
+    for b in 0..num_cids {
+        let bucket = &mut order[offsets[b] as usize..offsets[b + 1] as usize];
+        bucket.sort_unstable_by_key(|&e| (ends(&corner_id, e as usize).1, e));
+        let mut i = 0;
+        while i < bucket.len() {
+            let hi = ends(&corner_id, bucket[i] as usize).1;
+            let mut j = i + 1;
+            while j < bucket.len() && ends(&corner_id, bucket[j] as usize).1 == hi {
+                union(&mut parent, bucket[j - 1] / 3, bucket[j] / 3);
+                j += 1;
+            }
+            if j == i + 1 {
+                uv_edge_unique[bucket[i] as usize] = true;
+            }
+            i = j;
+        }
+    }
+    drop(order);
+    drop(corner_id);
+
+    // Charts numbered by lowest face (= the root, since the smaller root always wins).
+    let mut chart_of_face = vec![0u32; nf];
+    let mut chart_of_root = vec![u32::MAX; nf];
+    let mut num_charts = 0u32;
+    for f in 0..nf as u32 {
+        let r = find(&mut parent, f) as usize;
+        if chart_of_root[r] == u32::MAX {
+            chart_of_root[r] = num_charts;
+            num_charts += 1;
+        }
+        chart_of_face[f as usize] = chart_of_root[r];
+    }
+    drop(parent);
+    drop(chart_of_root);
+
+    // 4. 3-D edges: group half-edges by unordered position-id pair.
+    let plo: Vec<u32> = (0..3 * nf).map(|e| ends(&corner_pid, e).0).collect();
+    let (offsets, mut order) = bucket_order(num_pids, &plo);
+    drop(plo);
+    let mut seam_edges = 0usize;
+    let mut seam_len = Vec::new();
+    // Per half-edge: 1 = chart boundary (seam side), 2 = open border, 0 = neither.
+    let mut boundary_kind = vec![0u8; 3 * nf];
+    let len = |e: u32| edge_len_m[e as usize / 3][e as usize % 3];
+    for b in 0..num_pids {
+        let bucket = &mut order[offsets[b] as usize..offsets[b + 1] as usize];
+        bucket.sort_unstable_by_key(|&e| (ends(&corner_pid, e as usize).1, e));
+        let mut i = 0;
+        while i < bucket.len() {
+            let (plo, phi) = ends(&corner_pid, bucket[i] as usize);
+            let mut j = i + 1;
+            while j < bucket.len() && ends(&corner_pid, bucket[j] as usize).1 == phi {
+                j += 1;
+            }
+            let run = &bucket[i..j];
+            let proper = plo != phi;
+            let shared = run.len() >= 2;
+            let mut any_seam = false;
+            for &e in run {
+                if proper && uv_edge_unique[e as usize] {
+                    boundary_kind[e as usize] = if shared { 1 } else { 2 };
+                    any_seam |= shared;
+                }
+            }
+            if any_seam {
+                seam_edges += 1;
+                // Every half-edge of the run joins the same two points: same length bits.
+                seam_len.push(len(run[0]));
+            }
+            i = j;
+        }
+    }
+
+    // The evaluator sums half-edge lengths slot-major (all slot-0 half-edges, then 1, then 2).
+    let slot_major = |keep: &dyn Fn(u8) -> bool| -> Vec<f64> {
+        (0..3)
+            .flat_map(|k| (0..nf).map(move |f| 3 * f + k))
+            .filter(|&e| keep(boundary_kind[e]))
+            .map(|e| len(e as u32))
+            .collect()
+    };
+    let boundary = np_sum(&slot_major(&|b| b != 0));
+    let open = np_sum(&slot_major(&|b| b == 2));
+    Connectivity {
+        chart_of_face,
+        num_charts: num_charts as usize,
+        unique_corners: num_cids,
+        seam_edges,
+        seam_length_3d_m: np_sum(&seam_len),
+        boundary_length_3d_m: boundary,
+        open_border_length_3d_m: open,
+    }
+}

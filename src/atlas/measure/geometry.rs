@@ -1,0 +1,98 @@
+//! Per-face geometry of the measured atlas: 3-D and signed UV areas, degeneracy, edge lengths.
+//!
+//! Formulas and operation order follow the evaluator (`atlas_eval.py`, `atlas_metrics`), so that
+//! threshold decisions (degeneracy) come out the same bit for bit on the same `f64` inputs.
+//! Units: `_m`, `_m2` in model units, UV areas in page units². Cost: one pass, 50 bytes per face.
+use crate::mesh::{FaceId, TriangleMesh};
+
+/// The evaluator's relative degeneracy tolerance: `|A| <= 1e-12 · (longest edge)²`.
+pub(super) const DEGENERATE_RELATIVE: f64 = 1e-12;
+
+/// Per-face quantities, indexed by face.
+pub(super) struct FaceGeometry {
+    /// A3: 3-D area.
+    pub area_3d_m2: Vec<f64>,
+    /// A2: signed UV area (counter-clockwise positive, u right, v up in the formula's frame).
+    pub signed_uv_area: Vec<f64>,
+    /// UV-degenerate (NaN counts as degenerate).
+    pub uv_degenerate: Vec<bool>,
+    /// 3-D-degenerate.
+    pub degenerate_3d: Vec<bool>,
+    /// 3-D length of the half-edges corner 0→1, 1→2, 2→0.
+    pub edge_len_m: Vec<[f64; 3]>,
+}
+
+pub(super) fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+pub(super) fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+pub(super) fn norm3(a: [f64; 3]) -> f64 {
+    dot3(a, a).sqrt()
+}
+
+/// numpy's `maximum`: NaN wins.
+fn nan_max(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
+    }
+}
+
+/// The evaluator's `~(x > tol)`: true when `x <= tol` or either is NaN (NaN is degenerate).
+fn not_greater(x: f64, tol: f64) -> bool {
+    x.partial_cmp(&tol) != Some(std::cmp::Ordering::Greater)
+}
+
+/// UV corner as `f64` (exact).
+#[inline]
+pub(super) fn uv64(c: [f32; 2]) -> [f64; 2] {
+    [f64::from(c[0]), f64::from(c[1])]
+}
+
+/// Computes [`FaceGeometry`] for every face.
+pub(super) fn face_geometry(mesh: &TriangleMesh, corner_uvs: &[[[f32; 2]; 3]]) -> FaceGeometry {
+    let nf = mesh.num_faces();
+    let mut g = FaceGeometry {
+        area_3d_m2: Vec::with_capacity(nf),
+        signed_uv_area: Vec::with_capacity(nf),
+        uv_degenerate: Vec::with_capacity(nf),
+        degenerate_3d: Vec::with_capacity(nf),
+        edge_len_m: Vec::with_capacity(nf),
+    };
+    for (f, uv) in corner_uvs.iter().enumerate() {
+        let p = mesh.face_positions(FaceId(f as u32));
+        let e1 = sub3(p[1], p[0]);
+        let e2 = sub3(p[2], p[0]);
+        let e3 = sub3(p[2], p[1]);
+        let cross = [
+            e1[1] * e2[2] - e1[2] * e2[1],
+            e1[2] * e2[0] - e1[0] * e2[2],
+            e1[0] * e2[1] - e1[1] * e2[0],
+        ];
+        let a3 = 0.5 * norm3(cross);
+        let (l1, l2, l3) = (norm3(e1), norm3(e2), norm3(e3));
+        let lmax3 = nan_max(nan_max(l1, l2), l3);
+        let [s0, t0] = uv64(uv[0]);
+        let [s1, t1] = uv64(uv[1]);
+        let [s2, t2] = uv64(uv[2]);
+        let (ds1, dt1, ds2, dt2) = (s1 - s0, t1 - t0, s2 - s0, t2 - t0);
+        let a2 = 0.5 * (ds1 * dt2 - ds2 * dt1);
+        let lmax2 = nan_max(
+            nan_max(ds1.hypot(dt1), ds2.hypot(dt2)),
+            (s2 - s1).hypot(t2 - t1),
+        );
+        let deg2 = not_greater(a2.abs(), DEGENERATE_RELATIVE * lmax2 * lmax2);
+        let deg3 = not_greater(a3, DEGENERATE_RELATIVE * lmax3 * lmax3);
+        g.area_3d_m2.push(a3);
+        g.signed_uv_area.push(a2);
+        g.uv_degenerate.push(deg2);
+        g.degenerate_3d.push(deg3);
+        g.edge_len_m.push([l1, l3, l2]);
+    }
+    g
+}

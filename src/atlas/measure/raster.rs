@@ -1,0 +1,313 @@
+//! Centre-sampled rasterisation of each page: coverage, sampled overlap, padding violations.
+//!
+//! This is the evaluator's raster (`atlas_eval.py`, `_rasterize`), extended to `W × H` pages:
+//! - texel `(i, j)` of a page covers `[i/W, (i+1)/W] × [j/H, (j+1)/H]` and is sampled only at
+//!   its centre;
+//! - UVs are snapped to a fixed-point grid of `1/S` texel, `S = 256` (halved while
+//!   `max(W, H)·S·(max|uv| + 1) > 2²⁸`, i.e. only for huge coordinates), `X = rint(u·W·S)`,
+//!   `Y = rint(v·H·S)` (round half to even, as numpy);
+//! - edge functions are exact in `i64`; a sample exactly on an edge belongs to the triangle
+//!   that contains the point moved by `(+ε, +ε²)` (a top-left fill rule), so triangles sharing
+//!   an edge or a vertex never both cover a sample; zero-area triangles cover nothing, and
+//!   triangles whose UV box misses the unit square are not rasterised.
+//! - overlap pairs are enumerated only on texels covered twice or more, with the evaluator's
+//!   candidate budget ([`SAMPLED_PAIR_CANDIDATES_MAX`]) applied in its order (groups of `k`
+//!   faces per texel by increasing `k`, then texel order);
+//! - padding: a covered texel of chart `c` violates when some texel of another chart lies within
+//!   Chebyshev distance ≤ padding on the same page (texels covered by several charts are neither
+//!   tested nor testing). Computed with a separable sliding min/max of chart labels.
+//!
+//! Units: texels. Cost: `O(covered texels + faces + W·H·padding)` per page; 8 bytes per texel
+//! (count + label), plus 12 bytes per multiply covered (texel, face) sample.
+use super::{SampledOverlap, SAMPLED_PAIR_CANDIDATES_MAX};
+
+/// Fixed-point subdivisions per texel (the evaluator's `S`).
+const SUBPIXEL: i64 = 256;
+/// Bound on fixed-point magnitudes (the evaluator's `LIM`), keeping edge functions in `i64`.
+const FIXED_POINT_LIMIT: f64 = (1u64 << 28) as f64;
+
+pub(super) struct RasterResult {
+    pub sampled: SampledOverlap,
+    pub padding_violation_texels: u64,
+    pub covered_per_page: Vec<u64>,
+}
+
+/// A triangle in fixed point, counter-clockwise (positive area).
+struct FixedTriangle {
+    face: u32,
+    x: [i64; 3],
+    y: [i64; 3],
+}
+
+/// Calls `run(j, lo, hi)` for every row `j` whose texel centres `lo..=hi` the triangle covers.
+fn for_each_run(t: &FixedTriangle, s: i64, [w, h]: [i64; 2], mut run: impl FnMut(i64, i64, i64)) {
+    let half = s / 2;
+    let (ymin, ymax) = (t.y.iter().min().unwrap(), t.y.iter().max().unwrap());
+    // Rows whose sample y = j·S + S/2 lies in [ymin, ymax].
+    let j0 = (-((-(ymin - half)).div_euclid(s))).max(0);
+    let j1 = (ymax - half).div_euclid(s).min(h - 1);
+    let edges: [(i64, i64, i64, i64); 3] = std::array::from_fn(|e| {
+        let (a, b) = (e, (e + 1) % 3);
+        (t.x[a], t.y[a], t.x[b] - t.x[a], t.y[b] - t.y[a])
+    });
+    for j in j0..=j1 {
+        let ys = j * s + half;
+        let (mut lo, mut hi) = (0i64, w - 1);
+        for &(ax, ay, dx, dy) in &edges {
+            // Inside iff E(p) = dx·(py - ay) - dy·(px - ax) >= off, off = 0 on edges that own
+            // their samples (top-left rule), 1 otherwise; px = i·S + S/2.
+            let owns = dy < 0 || (dy == 0 && dx > 0);
+            let c = dx * (ys - ay) + dy * ax - i64::from(!owns);
+            if dy > 0 {
+                hi = hi.min((c - dy * half).div_euclid(dy * s));
+            } else if dy < 0 {
+                let m = -dy;
+                lo = lo.max(-((c + m * half).div_euclid(m * s)));
+            } else if c < 0 {
+                hi = -1;
+            }
+        }
+        if hi >= lo {
+            run(j, lo, hi);
+        }
+    }
+}
+
+/// Rasterises every page. `size = [W, H]` texels.
+pub(super) fn rasterize_pages(
+    corner_uvs: &[[[f32; 2]; 3]],
+    face_page: &[u32],
+    num_pages: u32,
+    size: [u32; 2],
+    padding_texels: u32,
+    chart_of_face: &[u32],
+) -> RasterResult {
+    let (w, h) = (i64::from(size[0]), i64::from(size[1]));
+    let texels = (w * h) as usize;
+    let r = w.max(h) as f64;
+    let mut faces_of_page: Vec<Vec<u32>> = vec![Vec::new(); num_pages as usize];
+    for (f, &p) in face_page.iter().enumerate() {
+        faces_of_page[p as usize].push(f as u32);
+    }
+    let mut out = RasterResult {
+        sampled: SampledOverlap::default(),
+        padding_violation_texels: 0,
+        covered_per_page: Vec::with_capacity(num_pages as usize),
+    };
+    // (global texel, face) samples on multiply covered texels, all pages.
+    let mut multi_samples: Vec<(u64, u32)> = Vec::new();
+    let mut cov = vec![0u32; texels];
+    let mut label = vec![-1i32; texels];
+    for (page, faces) in faces_of_page.iter().enumerate() {
+        // Faces whose UV box meets the unit square, and the fixed-point scale.
+        let mut cand_max = 0.0f64;
+        let inside: Vec<(u32, f64)> = faces
+            .iter()
+            .filter_map(|&f| {
+                let uv = &corner_uvs[f as usize];
+                let c: Vec<f64> = uv.iter().flatten().map(|&x| f64::from(x)).collect();
+                if !c.iter().all(|x| x.is_finite()) {
+                    return None;
+                }
+                let (us, vs) = ([c[0], c[2], c[4]], [c[1], c[3], c[5]]);
+                let max = |a: [f64; 3]| a[0].max(a[1]).max(a[2]);
+                let min = |a: [f64; 3]| a[0].min(a[1]).min(a[2]);
+                if max(us) < 0.0 || max(vs) < 0.0 || min(us) > 1.0 || min(vs) > 1.0 {
+                    return None;
+                }
+                let maxabs = c.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                cand_max = cand_max.max(maxabs);
+                Some((f, maxabs))
+            })
+            .collect();
+        let mut s = SUBPIXEL;
+        while s > 2 && r * s as f64 * (cand_max + 1.0) > FIXED_POINT_LIMIT {
+            s /= 2;
+        }
+        let (ws, hs) = ((w * s) as f64, (h * s) as f64);
+        let mut tris = Vec::with_capacity(inside.len());
+        for &(f, maxabs) in &inside {
+            if r * s as f64 * (maxabs + 1.0) > FIXED_POINT_LIMIT {
+                out.sampled.raster_skipped_triangles += 1;
+                continue;
+            }
+            let uv = &corner_uvs[f as usize];
+            let mut x = uv.map(|c| (f64::from(c[0]) * ws).round_ties_even() as i64);
+            let mut y = uv.map(|c| (f64::from(c[1]) * hs).round_ties_even() as i64);
+            let area2 = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+            if area2 == 0 {
+                continue;
+            }
+            if area2 < 0 {
+                x.swap(1, 2);
+                y.swap(1, 2);
+            }
+            tris.push(FixedTriangle { face: f, x, y });
+        }
+
+        // Pass 1: coverage count and chart label (-1 empty, -2 several charts).
+        cov.fill(0);
+        label.fill(-1);
+        for t in &tris {
+            let chart = chart_of_face[t.face as usize] as i32;
+            for_each_run(t, s, [w, h], |j, lo, hi| {
+                let row = (j * w) as usize;
+                for i in lo as usize..=hi as usize {
+                    let k = row + i;
+                    if cov[k] == 0 {
+                        label[k] = chart;
+                    } else if label[k] != chart {
+                        label[k] = -2;
+                    }
+                    cov[k] += 1;
+                }
+            });
+        }
+        let (mut covered, mut multi) = (0u64, 0u64);
+        for (&c, &l) in cov.iter().zip(&label) {
+            covered += u64::from(c >= 1);
+            if c >= 2 {
+                multi += 1;
+                if l == -2 {
+                    out.sampled.texels_cross_chart += 1;
+                } else {
+                    out.sampled.texels_same_chart += 1;
+                }
+            }
+        }
+        out.sampled.covered_texels += covered;
+        out.sampled.overlapping_texels += multi;
+        out.covered_per_page.push(covered);
+
+        // Pass 2, only when something is covered twice: the (texel, face) samples there.
+        if multi > 0 {
+            let base = page as u64 * texels as u64;
+            for t in &tris {
+                for_each_run(t, s, [w, h], |j, lo, hi| {
+                    let row = (j * w) as usize;
+                    for i in lo as usize..=hi as usize {
+                        if cov[row + i] >= 2 {
+                            multi_samples.push((base + (row + i) as u64, t.face));
+                        }
+                    }
+                });
+            }
+        }
+        out.padding_violation_texels +=
+            padding_violations(&label, [w as usize, h as usize], padding_texels as usize);
+    }
+    let covered = out.sampled.covered_texels;
+    out.sampled.fraction = if covered > 0 {
+        out.sampled.overlapping_texels as f64 / covered as f64
+    } else {
+        0.0
+    };
+    sampled_pairs(
+        &mut out.sampled,
+        multi_samples,
+        chart_of_face,
+        SAMPLED_PAIR_CANDIDATES_MAX,
+    );
+    out
+}
+
+/// Distinct face pairs sharing a multiply covered texel, with the evaluator's candidate budget.
+fn sampled_pairs(
+    out: &mut SampledOverlap,
+    mut samples: Vec<(u64, u32)>,
+    chart_of_face: &[u32],
+    max_candidates: u64,
+) {
+    if samples.is_empty() {
+        return;
+    }
+    samples.sort_unstable();
+    // Groups (size, start) of equal texel, then by size ascending, texel order kept.
+    let mut groups: Vec<(usize, usize)> = Vec::new();
+    let mut start = 0;
+    for i in 1..=samples.len() {
+        if i == samples.len() || samples[i].0 != samples[start].0 {
+            groups.push((i - start, start));
+            start = i;
+        }
+    }
+    groups.sort_by_key(|&(size, _)| size);
+    let nf = chart_of_face.len() as u64;
+    let mut keys: Vec<u64> = Vec::new();
+    let mut budget = max_candidates;
+    let mut g = 0;
+    while g < groups.len() {
+        let k = groups[g].0;
+        let mut end = g;
+        while end < groups.len() && groups[end].0 == k {
+            end += 1;
+        }
+        let per_group = (k * (k - 1) / 2) as u64;
+        let mut count = (end - g) as u64;
+        if count * per_group > budget {
+            out.pairs_truncated = true;
+            count = budget / per_group.max(1);
+        }
+        if count > 0 {
+            budget -= count * per_group;
+            for &(_, s0) in &groups[g..g + count as usize] {
+                let faces = &samples[s0..s0 + k];
+                for a in 0..k {
+                    for b in a + 1..k {
+                        keys.push(u64::from(faces[a].1) * nf + u64::from(faces[b].1));
+                    }
+                }
+            }
+        }
+        g = end;
+    }
+    keys.sort_unstable();
+    keys.dedup();
+    out.pairs = keys.len() as u64;
+    out.pairs_same_chart = keys
+        .iter()
+        .filter(|&&key| chart_of_face[(key / nf) as usize] == chart_of_face[(key % nf) as usize])
+        .count() as u64;
+    out.pairs_cross_chart = out.pairs - out.pairs_same_chart;
+}
+
+/// Covered single-chart texels with a texel of another chart within Chebyshev distance `p`.
+pub(super) fn padding_violations(label: &[i32], [w, h]: [usize; 2], p: usize) -> u64 {
+    if p == 0 || !label.iter().any(|&l| l >= 0) {
+        return 0;
+    }
+    // Row pass: min and max chart label over [i-p, i+p] (labels < 0 ignored).
+    let mut rmin = vec![i32::MAX; w * h];
+    let mut rmax = vec![-1i32; w * h];
+    for j in 0..h {
+        let row = &label[j * w..(j + 1) * w];
+        if !row.iter().any(|&l| l >= 0) {
+            continue;
+        }
+        for i in 0..w {
+            let (mut mn, mut mx) = (i32::MAX, -1);
+            for &l in &row[i.saturating_sub(p)..(i + p + 1).min(w)] {
+                if l >= 0 {
+                    mn = mn.min(l);
+                    mx = mx.max(l);
+                }
+            }
+            rmin[j * w + i] = mn;
+            rmax[j * w + i] = mx;
+        }
+    }
+    // Column pass, only at covered single-chart texels.
+    let mut violations = 0u64;
+    for j in 0..h {
+        for i in 0..w {
+            let me = label[j * w + i];
+            if me < 0 {
+                continue;
+            }
+            let bad = (j.saturating_sub(p)..(j + p + 1).min(h))
+                .any(|jj| rmin[jj * w + i] < me || rmax[jj * w + i] > me);
+            violations += u64::from(bad);
+        }
+    }
+    violations
+}

@@ -1,0 +1,321 @@
+//! Hand-computed cases for `measure_atlas`: each states its input and the exact expected values.
+use super::numpy::{np_sum, percentile_linear, percentile_weighted, stable_order};
+use super::*;
+use crate::mesh::MeshInput;
+
+/// A mesh from positions and triangles (one glTF mesh), with per-face corner UVs, on page 0.
+struct Case {
+    mesh: TriangleMesh,
+    uvs: Vec<[[f32; 2]; 3]>,
+    pages: Vec<u32>,
+}
+
+fn case(positions: &[[f64; 3]], tris: &[[u32; 3]], uvs: &[[[f32; 2]; 3]]) -> Case {
+    let input = MeshInput::single_group(positions.to_vec(), tris.to_vec());
+    let mesh = TriangleMesh::build(&input).expect("valid mesh").mesh;
+    Case {
+        mesh,
+        uvs: uvs.to_vec(),
+        pages: vec![0; uvs.len()],
+    }
+}
+
+fn measure(c: &Case, size: [u32; 2], padding: u32, num_pages: u32) -> AtlasReport {
+    measure_atlas(&MeasureInput {
+        mesh: &c.mesh,
+        corner_uvs: &c.uvs,
+        face_page: &c.pages,
+        num_pages,
+        width_texels: size[0],
+        height_texels: size[1],
+        padding_texels: padding,
+    })
+}
+
+fn close(a: Option<f64>, b: f64) -> bool {
+    a.is_some_and(|a| (a - b).abs() <= 1e-12 * b.abs().max(1.0))
+}
+
+const SQUARE: [[f64; 3]; 4] = [
+    [0.0, 0.0, 0.0],
+    [1.0, 0.0, 0.0],
+    [1.0, 1.0, 0.0],
+    [0.0, 1.0, 0.0],
+];
+const SQUARE_TRIS: [[u32; 3]; 2] = [[0, 1, 2], [0, 2, 3]];
+
+/// UVs of the square's two faces under `(x, y) ↦ (ox + sx·x, oy + sy·y)`.
+fn square_uvs(o: [f32; 2], s: [f32; 2]) -> Vec<[[f32; 2]; 3]> {
+    let uv = |i: usize| {
+        let p = SQUARE[i];
+        [o[0] + s[0] * p[0] as f32, o[1] + s[1] * p[1] as f32]
+    };
+    SQUARE_TRIS
+        .iter()
+        .map(|t| t.map(|v| uv(v as usize)))
+        .collect()
+}
+
+#[test]
+fn isometric_right_triangle_has_unit_stretch() {
+    // A right triangle with legs 1 m mapped to legs 0.5: a similarity, so after the global
+    // normalisation (k = 0.125 / 0.5 = 0.25) the map is an isometry.
+    let c = case(
+        &SQUARE[..3],
+        &[[0, 1, 2]],
+        &[[[0.0, 0.0], [0.5, 0.0], [0.5, 0.5]]],
+    );
+    let r = measure(&c, [64, 64], 0, 1);
+    assert!(close(r.stretch.l2, 1.0), "{:?}", r.stretch);
+    assert!(close(r.stretch.linf, 1.0));
+    assert!(close(r.stretch.linf_sander, 1.0));
+    assert!(close(r.stretch.uv_area_over_3d_area, 0.25));
+    assert!(!r.stretch.strict_infinite);
+    let a = r.angle_distortion.expect("used faces");
+    assert!(close(a.conformal_ratio_mean, 1.0));
+    assert!(close(a.angle_deviation_deg_mean.map(|d| d + 1.0), 1.0));
+    let ar = r.area_distortion.expect("used faces");
+    assert!(close(ar.p50, 1.0) && close(ar.p5_aw, 1.0));
+    assert_eq!((r.charts, r.flipped, r.degenerate), (1, 0, 0));
+    assert!(close(Some(r.packing_efficiency), 0.125));
+    assert!(close(Some(r.area_3d_m2), 0.5));
+    assert_eq!(r.per_chart.len(), 1);
+    assert!(close(r.per_chart[0].l2, 1.0) && close(r.per_chart[0].linf, 1.0));
+    assert!(close(r.per_chart[0].texel_density, 0.5));
+    let d = r.texel_density.expect("density");
+    assert!(close(d.texels_per_unit, 0.5 * 64.0));
+    assert!(close(d.max_over_min, 1.0) && close(d.cv, 0.0));
+}
+
+#[test]
+fn anisotropic_scale_has_the_analytic_stretch() {
+    // u = 0.5 x, v = 0.125 y: k = 1/16; dq/ds = 2, dq/dt = 8, normalised a = 0.25, c = 4,
+    // so Γ = 2, γ = 0.5: L2 = sqrt((a + c)/2) = sqrt(2.125), L∞ = max(Γ, 1/γ) = 2,
+    // conformal ratio 4, angle deviation 0, area ratio 1 everywhere.
+    let c = case(&SQUARE, &SQUARE_TRIS, &square_uvs([0.0, 0.0], [0.5, 0.125]));
+    let r = measure(&c, [64, 64], 0, 1);
+    assert!(close(r.stretch.uv_area_over_3d_area, 0.0625));
+    assert!(close(r.stretch.l2, 2.125f64.sqrt()), "{:?}", r.stretch);
+    assert!(close(r.stretch.linf, 2.0));
+    assert!(close(r.stretch.linf_sander, 2.0));
+    let a = r.angle_distortion.expect("used faces");
+    assert!(close(a.conformal_ratio_p95, 4.0) && close(a.conformal_ratio_mean_aw, 4.0));
+    assert!(a.angle_deviation_deg_p95.is_some_and(|d| d.abs() < 1e-9));
+    let ar = r.area_distortion.expect("used faces");
+    assert!(close(ar.p5, 1.0) && close(ar.p95_aw, 1.0));
+    assert_eq!(r.charts, 1);
+    // Two faces sharing the diagonal never overlap, exactly or sampled.
+    assert_eq!(r.overlap.exact.pairs, 0);
+    assert_eq!(r.overlap.sampled.overlapping_texels, 0);
+}
+
+#[test]
+fn two_stacked_charts_overlap() {
+    // Two separate squares (different positions → two charts) on the same UVs.
+    let mut pos = SQUARE.to_vec();
+    pos.extend(SQUARE.iter().map(|p| [p[0] + 5.0, p[1], p[2]]));
+    let tris = [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]];
+    let mut uvs = square_uvs([0.25, 0.25], [0.5, 0.5]);
+    uvs.extend(square_uvs([0.25, 0.25], [0.5, 0.5]));
+    let c = case(&pos, &tris, &uvs);
+    let r = measure(&c, [32, 32], 0, 1);
+    assert_eq!(r.charts, 2);
+    // Each face of one square meets both faces of the other... except the pair of opposite
+    // halves, which only share the diagonal: (0,2), (1,3) overlap fully; (0,3), (1,2) touch
+    // along the diagonal only. So 2 exact pairs, cross-chart.
+    assert_eq!(r.overlap.exact.pairs, 2, "{:?}", r.overlap.exact);
+    assert_eq!(r.overlap.exact.pairs_cross_chart, 2);
+    assert_eq!(
+        r.overlap.exact.examples,
+        vec![[FaceId(0), FaceId(2)], [FaceId(1), FaceId(3)]]
+    );
+    // Sampled: 16 × 16 texels covered twice, the same two pairs.
+    assert_eq!(r.overlap.sampled.covered_texels, 256);
+    assert_eq!(r.overlap.sampled.overlapping_texels, 256);
+    assert_eq!(r.overlap.sampled.texels_cross_chart, 256);
+    assert_eq!(r.overlap.sampled.pairs, 2);
+    assert_eq!(r.packing_efficiency, 0.5);
+    // On two pages they do not overlap.
+    let mut c2 = c;
+    c2.pages = vec![0, 0, 1, 1];
+    let r2 = measure(&c2, [32, 32], 0, 2);
+    assert_eq!((r2.overlap.exact.pairs, r2.overlap.sampled.pairs), (0, 0));
+    assert_eq!(r2.pages.len(), 2);
+    assert_eq!((r2.pages[1].faces, r2.pages[1].charts), (2, 1));
+    assert_eq!(r2.pages[1].covered_texels, 256);
+    assert_eq!(r2.texel_utilization, 512.0 / 2048.0);
+    assert_eq!(r2.packing_efficiency, 0.25);
+}
+
+#[test]
+fn folded_triangle_is_flipped_and_overlaps_its_neighbour() {
+    // Face 1 = (v0, v2, v3) with v3's UV moved across the shared diagonal: still glued to
+    // face 0 (same chart) but clockwise, inside face 0.
+    let uv = [[0.1, 0.1], [0.9, 0.1], [0.9, 0.9], [0.6, 0.4]];
+    let uvs: Vec<[[f32; 2]; 3]> = SQUARE_TRIS
+        .iter()
+        .map(|t| t.map(|v| uv[v as usize]))
+        .collect();
+    let c = case(&SQUARE, &SQUARE_TRIS, &uvs);
+    let r = measure(&c, [64, 64], 0, 1);
+    assert_eq!(r.charts, 1);
+    assert_eq!(r.flipped, 1);
+    assert_eq!(r.charts_minority_orientation, 0);
+    assert_eq!(r.overlap.exact.pairs, 1);
+    assert_eq!(r.overlap.exact.pairs_same_chart, 1);
+    assert!(r.overlap.sampled.texels_same_chart > 0);
+    // The same two faces mapped with both orientations consistent: no flip, no overlap.
+    let c = case(&SQUARE, &SQUARE_TRIS, &square_uvs([0.1, 0.1], [0.8, 0.8]));
+    let r = measure(&c, [64, 64], 0, 1);
+    assert_eq!((r.flipped, r.overlap.exact.pairs), (0, 0));
+}
+
+#[test]
+fn mirrored_chart_is_minority_not_flipped() {
+    let mut pos = SQUARE.to_vec();
+    pos.extend(SQUARE.iter().map(|p| [p[0] + 5.0, p[1], p[2]]));
+    let tris = [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]];
+    let mut uvs = square_uvs([0.0, 0.0], [0.4, 0.4]);
+    // Second square mirrored in u (smaller, so it is the minority).
+    uvs.extend(square_uvs([0.9, 0.5], [-0.3, 0.3]));
+    let r = measure(&case(&pos, &tris, &uvs), [64, 64], 0, 1);
+    assert_eq!(
+        (r.charts, r.flipped, r.charts_minority_orientation),
+        (2, 0, 1)
+    );
+    assert!(r.per_chart[1].signed_uv_area < 0.0 && r.per_chart[0].signed_uv_area > 0.0);
+}
+
+#[test]
+fn padding_violation_at_exactly_padding_but_not_one_more() {
+    // Chart A covers texel columns 0..=3 and rows 0..=3 of a 16² page; chart B the same rows
+    // and columns 3+d..=6+d. The Chebyshev distance between them is d.
+    let p = 2;
+    for (d, expected) in [(p, 8), (p + 1, 0)] {
+        let mut pos = SQUARE.to_vec();
+        pos.extend(SQUARE.iter().map(|q| [q[0] + 5.0, q[1], q[2]]));
+        let tris = [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]];
+        let t = 1.0 / 16.0;
+        let mut uvs = square_uvs([0.0, 0.0], [4.0 * t, 4.0 * t]);
+        uvs.extend(square_uvs([(3 + d) as f32 * t, 0.0], [4.0 * t, 4.0 * t]));
+        let r = measure(&case(&pos, &tris, &uvs), [16, 16], p, 1);
+        assert_eq!(r.overlap.sampled.covered_texels, 32);
+        assert_eq!(r.padding.violation_texels, expected, "distance {d}");
+        // Padding 0 disables the check.
+        let r0 = measure(&case(&pos, &tris, &uvs), [16, 16], 0, 1);
+        assert_eq!(r0.padding.violation_texels, 0);
+    }
+}
+
+#[test]
+fn out_of_range_corners_use_the_evaluator_tolerance() {
+    let uvs = [[[-0.01, 0.5], [0.5, 0.5], [0.5, 1.0 + 1e-7]]];
+    let r = measure(&case(&SQUARE[..3], &[[0, 1, 2]], &uvs), [16, 16], 0, 1);
+    assert_eq!((r.out_of_range_corners, r.out_of_range_triangles), (1, 1));
+    let bbox = r.uv_bbox.expect("finite");
+    assert_eq!(bbox[0], f64::from(-0.01f32));
+    assert_eq!(bbox[3], f64::from(1.0f32 + 1e-7));
+}
+
+#[test]
+fn seam_on_the_diagonal_makes_two_charts() {
+    // Face 1 shifted right by 0.5 in UV: the diagonal is a seam, the 4 sides open borders.
+    let mut uvs = square_uvs([0.0, 0.0], [0.4, 0.4]);
+    uvs[1] = uvs[1].map(|c| [c[0] + 0.5, c[1]]);
+    let r = measure(&case(&SQUARE, &SQUARE_TRIS, &uvs), [32, 32], 0, 1);
+    assert_eq!((r.charts, r.seam_edges), (2, 1));
+    assert!(close(Some(r.seam_length_3d_m), 2f64.sqrt()));
+    assert!(close(Some(r.open_border_length_3d_m), 4.0));
+    assert!(close(r.boundary_edge_ratio, 4.0 + 2.0 * 2f64.sqrt()));
+    assert!(close(r.seam_edge_ratio, 2f64.sqrt()));
+    assert_eq!(r.unique_corners, 6);
+    assert_eq!(r.per_chart.iter().map(|c| c.faces).sum::<usize>(), 2);
+}
+
+#[test]
+fn uv_degenerate_face_with_area_is_strictly_infinite() {
+    let uvs = [
+        [[0.1, 0.1], [0.5, 0.1], [0.5, 0.5]],
+        [[0.1, 0.1], [0.5, 0.5], [0.3, 0.3]], // collinear
+    ];
+    let r = measure(&case(&SQUARE, &SQUARE_TRIS, &uvs), [16, 16], 0, 1);
+    assert_eq!((r.degenerate, r.degenerate_uv_with_3d_area), (1, 1));
+    assert!(r.stretch.strict_infinite);
+    assert_eq!(r.stretch.triangles_used, 1);
+    assert!(close(r.stretch.linf, 1.0));
+    // A zero-area face has no interior: it overlaps nothing.
+    assert_eq!(r.overlap.exact.pairs, 0);
+}
+
+#[test]
+fn shared_edge_samples_are_covered_once_and_pages_can_be_rectangular() {
+    // The unit square filling an 8 × 4 page: texel centres on the diagonal belong to one face.
+    let r = measure(
+        &case(&SQUARE, &SQUARE_TRIS, &square_uvs([0.0, 0.0], [1.0, 1.0])),
+        [8, 4],
+        1,
+        1,
+    );
+    assert_eq!(r.overlap.sampled.covered_texels, 32);
+    assert_eq!(r.overlap.sampled.overlapping_texels, 0);
+    assert_eq!(r.texel_utilization, 1.0);
+    assert_eq!(r.padding.violation_texels, 0);
+    assert!(close(
+        r.texel_density.and_then(|d| d.texels_per_unit),
+        32f64.sqrt()
+    ));
+}
+
+#[test]
+fn exact_overlap_is_exact_on_touching_and_barely_crossing_faces() {
+    let a: [[f32; 2]; 3] = [[0.0, 0.0], [0.5, 0.0], [0.0, 0.5]];
+    // Sharing the hypotenuse from the other side: touching, no overlap.
+    let b: [[f32; 2]; 3] = [[0.5, 0.0], [0.5, 0.5], [0.0, 0.5]];
+    assert!(!overlap::interiors_intersect(
+        &overlap::ccw_triangle(&a).unwrap(),
+        &overlap::ccw_triangle(&b).unwrap()
+    ));
+    // The same face pushed one f32 ulp across the hypotenuse: overlapping.
+    let e = f32::EPSILON / 4.0;
+    let c: [[f32; 2]; 3] = [[0.5 - e, 0.0], [0.5, 0.5], [0.0, 0.5 - e]];
+    assert!(overlap::interiors_intersect(
+        &overlap::ccw_triangle(&a).unwrap(),
+        &overlap::ccw_triangle(&c).unwrap()
+    ));
+    // Only a shared vertex: no overlap.
+    let d: [[f32; 2]; 3] = [[0.5, 0.0], [1.0, 0.0], [0.75, 0.5]];
+    assert!(!overlap::interiors_intersect(
+        &overlap::ccw_triangle(&a).unwrap(),
+        &overlap::ccw_triangle(&d).unwrap()
+    ));
+    // Zero area: no interior.
+    assert!(overlap::ccw_triangle(&[[0.0, 0.0], [0.25, 0.25], [0.5, 0.5]]).is_none());
+}
+
+#[test]
+fn percentiles_follow_numpy() {
+    // numpy.percentile([1, 2, 3, 4], 95) == 3.85; ([1, 2, 3, 4], 5) == 1.15; median 2.5.
+    let x = [4.0, 1.0, 3.0, 2.0];
+    let o = stable_order(&x);
+    let sorted: Vec<f64> = o.iter().map(|&i| x[i as usize]).collect();
+    assert!(close(percentile_linear(&sorted, 95.0), 3.85));
+    assert!(close(percentile_linear(&sorted, 5.0), 1.15));
+    assert!(close(percentile_linear(&sorted, 50.0), 2.5));
+    // Weighted (inverted CDF): weights 1, 1, 2 on 1, 2, 3: CDF 1, 2, 4; q50 → 2 reached at x=2.
+    let (x, w) = ([3.0, 1.0, 2.0], [2.0, 1.0, 1.0]);
+    let o = stable_order(&x);
+    assert_eq!(percentile_weighted(&x, &w, &o, 50.0), Some(2.0));
+    assert_eq!(percentile_weighted(&x, &w, &o, 51.0), Some(3.0));
+    assert_eq!(percentile_weighted(&x, &w, &o, 5.0), Some(1.0));
+}
+
+#[test]
+fn pairwise_sum_matches_numpy() {
+    // numpy 2.x: np.sum(np.full(1000, 0.1)) == 100.00000000000001; a sequential sum gives
+    // 99.9999999999986.
+    let x = vec![0.1f64; 1000];
+    assert_eq!(np_sum(&x), 100.000_000_000_000_01);
+    assert_eq!(x.iter().fold(0.0, |s, &v| s + v), 99.999_999_999_998_6);
+    assert_eq!(np_sum(&[1.0, 2.0, 3.0]), 6.0);
+    assert_eq!(np_sum(&[]), 0.0);
+}

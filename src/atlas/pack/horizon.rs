@@ -1,0 +1,363 @@
+//! The horizon ("Tetris") packer of lscm-2002 §4, inserting from four directions as
+//! isocharts-2004 §6.
+//!
+//! Purpose: place charts one by one (callers sort them, largest first) on one page, each at the
+//! position that wastes least space between its own horizon and the packing's current horizon.
+//!
+//! Model. The packing grows from its first chart outwards inside a canvas of `2W × 2H` texels;
+//! its bounding box (of the padded footprints `D`) is kept within the page size `W × H`, so at
+//! the end it is translated onto the page. Four horizons are kept over the canvas, of the
+//! charts' footprints `F` (not padded): per column the first and the last occupied row, per row
+//! the first and the last occupied column. A line no chart touches has the bounding box's far
+//! side as its horizon (isocharts-2004: "the distance from the top of the packing to the
+//! nearest chart", the full height when there is none).
+//!
+//! Insertion from, say, the +y side at column `x`: the chart's `D` must lie past the packing's
+//! last occupied row in every column it covers, so it goes to the smallest `y` with
+//! `y + Dmin[c] >= wall[x + c]` for every column `c`; the wasted space is
+//! `Σ_c (y + Dmin[c] - wall[x + c])`, the area between the chart's bottom horizon and the
+//! current horizon (lscm-2002 Fig. 7). Every `x` keeping the bounding box within `W × H` is
+//! tried, for every orientation; the least waste wins (ties: first orientation, then smallest
+//! `x`: deterministic). The direction pair follows isocharts-2004 §6: with the current box
+//! `W_curr × H_curr`, if `H_curr · W / H > W_curr` the chart comes from the left or right,
+//! otherwise from the top or bottom; the pair's other member competes on waste. If the pair has
+//! no feasible position, the other pair is tried.
+//!
+//! Invariant (the no-overlap guarantee, exact on the texel grid): a chart's padded footprint
+//! `D` never meets the footprint `F` of a chart already placed, because in each line it covers
+//! it lies entirely beyond the horizon of every earlier `F`; and every `D` lies inside the
+//! bounding box, hence inside the page after translation. So every `F` keeps `padding` empty
+//! texels (Chebyshev) from every other `F` and from the page edge.
+//!
+//! Units: texels (`i32` canvas coordinates, `i64` waste in texels²).
+//!
+//! Cost per chart: O(canvas) to build the walls, then per orientation and direction
+//! O(positions × lines), positions ≤ W + chart width; the inner loop visits the chart's lines
+//! most-protruding first and stops as soon as the waste cannot beat the best so far, which in
+//! practice visits a few lines per position.
+use super::place::{Extents, Orientation, EMPTY};
+
+/// A chosen position: orientation index and the canvas position of the orientation's grid
+/// origin (top-left of `D`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Placement {
+    /// Index into the chart's orientations.
+    pub orientation: usize,
+    /// Canvas column of the grid origin.
+    pub x: i32,
+    /// Canvas row of the grid origin.
+    pub y: i32,
+}
+
+/// One page being packed.
+#[derive(Debug, Clone)]
+pub struct HorizonPage {
+    bound: [i32; 2],
+    /// Per canvas column, `(first, last)` occupied row of any `F` ([`EMPTY`] if none).
+    cols: Vec<(i32, i32)>,
+    /// Per canvas row, `(first, last)` occupied column.
+    rows: Vec<(i32, i32)>,
+    /// Bounding box of the `D`s placed: `[x0, y0, x1, y1)`.
+    bbox: Option<[i32; 4]>,
+}
+
+/// Which side a chart comes from, and the axis it slides along.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Side {
+    /// From larger y (rests on the packing's last rows).
+    PlusY,
+    /// From smaller y.
+    MinusY,
+    /// From larger x.
+    PlusX,
+    /// From smaller x.
+    MinusX,
+}
+
+/// Best candidate so far: waste, then placement.
+type Best = Option<(i64, Placement)>;
+
+impl HorizonPage {
+    /// An empty page of `width × height` texels (each `>= 1`, at most `i32::MAX / 4`).
+    pub fn new(width_texels: u32, height_texels: u32) -> Self {
+        let (w, h) = (width_texels as i32, height_texels as i32);
+        Self {
+            bound: [w, h],
+            cols: vec![EMPTY; 2 * w as usize],
+            rows: vec![EMPTY; 2 * h as usize],
+            bbox: None,
+        }
+    }
+
+    /// Bounding box of the placed padded footprints in canvas texels, `[x0, y0, x1, y1)`.
+    pub fn bbox(&self) -> Option<[i32; 4]> {
+        self.bbox
+    }
+
+    /// The best placement of a chart given its orientations, or `None` when no orientation
+    /// fits anywhere. Does not modify the page.
+    pub fn find(&self, orientations: &[Orientation]) -> Option<Placement> {
+        let [bw, bh] = self.bound;
+        let fits = |o: &Orientation| {
+            o.dilated.is_some()
+                && o.width_texels <= i64::from(bw)
+                && o.height_texels <= i64::from(bh)
+        };
+        let Some([x0, y0, x1, y1]) = self.bbox else {
+            // First chart: the orientation with the smallest box, centred in the canvas.
+            let (k, o) = orientations
+                .iter()
+                .enumerate()
+                .filter(|(_, o)| fits(o))
+                .min_by_key(|(k, o)| (o.width_texels * o.height_texels, *k))?;
+            return Some(Placement {
+                orientation: k,
+                x: bw - (o.width_texels as i32 + 1) / 2,
+                y: bh - (o.height_texels as i32 + 1) / 2,
+            });
+        };
+        let widen = i64::from(y1 - y0) * i64::from(bw) > i64::from(x1 - x0) * i64::from(bh);
+        let pairs = if widen {
+            [[Side::PlusX, Side::MinusX], [Side::PlusY, Side::MinusY]]
+        } else {
+            [[Side::PlusY, Side::MinusY], [Side::PlusX, Side::MinusX]]
+        };
+        for pair in pairs {
+            let mut best: Best = None;
+            for side in pair {
+                let wall = self.wall(side);
+                let prefix = prefix_sums(&wall);
+                for (k, o) in orientations.iter().enumerate() {
+                    // An orientation whose padded footprint repeats an earlier one's (small or
+                    // symmetric charts) cannot do better: skip it.
+                    let repeated = orientations[..k].iter().any(|e| {
+                        e.width_texels == o.width_texels
+                            && e.height_texels == o.height_texels
+                            && e.dilated == o.dilated
+                    });
+                    if fits(o) && !repeated {
+                        self.search(side, &wall, &prefix, k, o, &mut best);
+                    }
+                }
+            }
+            if let Some((_, p)) = best {
+                return Some(p);
+            }
+        }
+        None
+    }
+
+    /// Records a chart at `placement` (its footprint `F` updates the horizons; its `D` the box).
+    pub fn commit(&mut self, o: &Orientation, placement: Placement) {
+        let (Some(f), Some(_)) = (&o.footprint, &o.dilated) else {
+            return;
+        };
+        let (px, py) = (placement.x, placement.y);
+        for (c, &(a, b)) in f.cols.iter().enumerate() {
+            if (a, b) != EMPTY {
+                let e = &mut self.cols[(px + c as i32) as usize];
+                *e = (e.0.min(py + a), e.1.max(py + b));
+            }
+        }
+        for (r, &(a, b)) in f.rows.iter().enumerate() {
+            if (a, b) != EMPTY {
+                let e = &mut self.rows[(py + r as i32) as usize];
+                *e = (e.0.min(px + a), e.1.max(px + b));
+            }
+        }
+        let (w, h) = (o.width_texels as i32, o.height_texels as i32);
+        let b = [px, py, px + w, py + h];
+        self.bbox = Some(match self.bbox {
+            None => b,
+            Some(a) => [
+                a[0].min(b[0]),
+                a[1].min(b[1]),
+                a[2].max(b[2]),
+                a[3].max(b[3]),
+            ],
+        });
+    }
+
+    /// The wall a chart coming from `side` rests on, per canvas line along the slide axis, in
+    /// the side's own coordinate `t` (for the minus sides `t = -position`, so every side is a
+    /// "smallest t with t + prof ≥ wall" problem).
+    fn wall(&self, side: Side) -> Vec<i32> {
+        let [x0, y0, x1, y1] = self.bbox.unwrap_or([0; 4]);
+        let (lines, empty) = match side {
+            Side::PlusY | Side::MinusY => (&self.cols, if side == Side::PlusY { y0 } else { y1 }),
+            Side::PlusX | Side::MinusX => (&self.rows, if side == Side::PlusX { x0 } else { x1 }),
+        };
+        let plus = matches!(side, Side::PlusY | Side::PlusX);
+        lines
+            .iter()
+            .map(|&(a, b)| {
+                let v = if (a, b) == EMPTY {
+                    empty
+                } else if plus {
+                    b + 1
+                } else {
+                    a
+                };
+                if plus {
+                    v
+                } else {
+                    -v
+                }
+            })
+            .collect()
+    }
+
+    fn search(
+        &self,
+        side: Side,
+        wall: &[i32],
+        prefix: &[i64],
+        k: usize,
+        o: &Orientation,
+        best: &mut Best,
+    ) {
+        let [x0, y0, x1, y1] = self.bbox.unwrap_or([0; 4]);
+        let [bw, bh] = self.bound;
+        let Some(d) = o.dilated.as_ref() else {
+            return;
+        };
+        let (w, h) = (o.width_texels as i32, o.height_texels as i32);
+        // Along-axis profile and range, and the bound on t.
+        // Positions keep the box within the bound and touch the box's range: all positions
+        // wholly beside it see the same flat wall, so the touching one stands for them.
+        let (lines, len, lo, hi, t_max) = match side {
+            Side::PlusY => (
+                &d.cols,
+                w,
+                (x1 - bw).max(x0 - w),
+                (x0 + bw - w).min(x1),
+                i64::from(y0 + bh - h),
+            ),
+            Side::MinusY => (
+                &d.cols,
+                w,
+                (x1 - bw).max(x0 - w),
+                (x0 + bw - w).min(x1),
+                i64::from(bh - y1),
+            ),
+            Side::PlusX => (
+                &d.rows,
+                h,
+                (y1 - bh).max(y0 - h),
+                (y0 + bh - h).min(y1),
+                i64::from(x0 + bw - w),
+            ),
+            Side::MinusX => (
+                &d.rows,
+                h,
+                (y1 - bh).max(y0 - h),
+                (y0 + bh - h).min(y1),
+                i64::from(bw - x1),
+            ),
+        };
+        let plus = matches!(side, Side::PlusY | Side::PlusX);
+        // prof[c]: the chart's near edge in line c, in the side's t coordinate; an empty line
+        // gets a huge value so that it never constrains (wall - prof stays very negative).
+        const NO_LINE: i32 = 1 << 29;
+        let prof: Vec<i32> = lines
+            .iter()
+            .map(|&(a, b)| {
+                if (a, b) == EMPTY {
+                    NO_LINE
+                } else if plus {
+                    a
+                } else {
+                    -(b + 1)
+                }
+            })
+            .collect();
+        let mut order: Vec<usize> = (0..prof.len()).filter(|&c| prof[c] != NO_LINE).collect();
+        order.sort_by_key(|&c| (prof[c], c));
+        let n = order.len() as i64;
+        if n == 0 {
+            return;
+        }
+        // The most protruding lines usually decide t: a lower bound of t at every position from
+        // them, computed line by line over all positions (contiguous, vectorizes), rejects most
+        // positions with one comparison.
+        let key = &order[..order.len().min(4)];
+        let sum_prof: i64 = order.iter().map(|&c| i64::from(prof[c])).sum();
+        let dense = order.len() == prof.len();
+        let lo = lo.max(0);
+        let hi = hi.min(wall.len() as i32 - len);
+        if lo > hi {
+            return;
+        }
+        let npos = (hi - lo + 1) as usize;
+        let mut t_key = vec![i32::MIN; npos];
+        for &c in key {
+            let start = lo as usize + c;
+            let pc = prof[c];
+            for (t, &wv) in t_key.iter_mut().zip(&wall[start..start + npos]) {
+                *t = (*t).max(wv - pc);
+            }
+        }
+        const CHUNK: usize = 32;
+        for (i, &t0) in t_key.iter().enumerate() {
+            let pos = lo + i as i32;
+            let p = pos as usize;
+            let wall_sum = if dense {
+                prefix[p + len as usize] - prefix[p]
+            } else {
+                order.iter().map(|&c| i64::from(wall[p + c])).sum()
+            };
+            let base = sum_prof - wall_sum;
+            let bound = best.map_or(i64::MAX, |b| b.0);
+            let reject = |t: i64| t > t_max || n * t + base >= bound;
+            if reject(i64::from(t0)) {
+                continue;
+            }
+            let mut t = t0;
+            let mut rejected = false;
+            let window = &wall[p..p + len as usize];
+            for (wc, pc) in window.chunks(CHUNK).zip(prof.chunks(CHUNK)) {
+                // Branch-free over a chunk (vectorizes), then one test.
+                let m = wc
+                    .iter()
+                    .zip(pc)
+                    .map(|(a, b)| a - b)
+                    .fold(i32::MIN, i32::max);
+                t = t.max(m);
+                if reject(i64::from(t)) {
+                    rejected = true;
+                    break;
+                }
+            }
+            if rejected {
+                continue;
+            }
+            let t = i64::from(t);
+            let waste = n * t + base;
+            let (x, y) = match side {
+                Side::PlusY => (pos, t as i32),
+                Side::MinusY => (pos, -(t as i32)),
+                Side::PlusX => (t as i32, pos),
+                Side::MinusX => (-(t as i32), pos),
+            };
+            *best = Some((
+                waste,
+                Placement {
+                    orientation: k,
+                    x,
+                    y,
+                },
+            ));
+        }
+    }
+}
+
+fn prefix_sums(v: &[i32]) -> Vec<i64> {
+    let mut out = Vec::with_capacity(v.len() + 1);
+    let mut s = 0i64;
+    out.push(0);
+    for &x in v {
+        s += i64::from(x);
+        out.push(s);
+    }
+    out
+}

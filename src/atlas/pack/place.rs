@@ -1,0 +1,484 @@
+//! Chart placement geometry: uniform texel density, diameter orientation, rotations, footprints.
+//!
+//! Purpose: turn one input chart into the candidate *orientations* the horizon packer chooses
+//! from. Each orientation is an affine map from the chart's UVs (model units) to local texel
+//! coordinates, with the chart's conservative footprint `F` ([`super::raster`]) and `F` dilated
+//! by the padding (`D`), both summarised as per-column and per-row extents (the horizons of
+//! lscm-2002 §4 step 3, "with an additional margin").
+//!
+//! - Density (lscm-2002 §4 step 1, isocharts-2004 §6 step 1): every chart is scaled by
+//!   `sqrt(area_m2 / uv_area) × texels_per_unit`, so placed UV area = `area_m2 ×
+//!   texels_per_unit²` texels² for every chart (rotations preserve it).
+//! - Orientation (lscm-2002 §4 step 2): the chart's maximum diameter (the farthest pair of its
+//!   convex hull, rotating calipers) is turned vertical; then `rotations` angles evenly spaced
+//!   over a full turn are tried (isocharts-2004 §6: 16). When `rotations` is a multiple of 4,
+//!   only the first quarter is rasterized: a quarter turn maps the texel grid onto itself, so
+//!   the other footprints are the same extents re-indexed (exact, no re-rasterization).
+//! - Layout: the footprint `F` sits in a grid with a `padding`-texel margin on every side
+//!   (`D` fits the grid exactly); the chart is centred in its texel span so that both ends keep
+//!   a margin of [`LAYOUT_EPS_TEXELS`] from the texel lines.
+//! - Degenerate charts (zero UV area, zero 3-D area, no triangles) collapse to a point at a
+//!   texel centre: a one-texel footprint, never a NaN.
+//!
+//! Preconditions: checked by [`prepare_chart`] (finite UVs and area, indices in range).
+//!
+//! Units: chart UVs in model units; `_texels` on the page; `texels_per_unit` per model unit.
+//!
+//! Cost: per orientation rasterized, O(triangles × rows per triangle + D texels / 64 × padding);
+//! orientations wider or taller than the page are not rasterized (bounded memory whatever the
+//! trial density).
+use super::raster::{rasterize_conservative, Mask};
+use super::{PackChart, PackError};
+
+/// Margin kept between a chart's extreme vertices and the texel lines of its span, texels.
+pub const LAYOUT_EPS_TEXELS: f64 = 1e-3;
+
+/// Empty line of an extents array.
+pub const EMPTY: (i32, i32) = (i32::MAX, i32::MIN);
+
+/// What does not depend on the density: validated once per chart.
+#[derive(Debug, Clone)]
+pub struct PreparedChart {
+    /// Centre of the UV bounding box of the referenced vertices (model units).
+    pub centre: [f64; 2],
+    /// Texels per model UV unit at density 1 (`sqrt(area_m2 / uv_area)`); 0 for a degenerate
+    /// chart.
+    pub unit_scale: f64,
+    /// Rotation that turns the maximum diameter vertical, radians.
+    pub base_angle_rad: f64,
+    /// The 3-D area (sort key and area accounting), model units².
+    pub area_m2: f64,
+    /// False for a chart without vertices (nothing to place).
+    pub has_vertices: bool,
+}
+
+/// Validates a chart and computes its density-independent data.
+///
+/// Errors: [`PackError::InvalidChart`] for a non-finite UV, a negative or non-finite area, or a
+/// triangle index out of range.
+pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChart, PackError> {
+    let invalid = |detail: String| PackError::InvalidChart {
+        chart: index,
+        detail,
+    };
+    if !(chart.area_m2.is_finite() && chart.area_m2 >= 0.0) {
+        return Err(invalid(format!(
+            "area_m2 is {}; pass the chart's finite, non-negative 3-D area",
+            chart.area_m2
+        )));
+    }
+    if let Some(v) = chart
+        .uv
+        .iter()
+        .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+    {
+        return Err(invalid(format!(
+            "vertex {v} has a non-finite UV; repair the parameterization"
+        )));
+    }
+    let n = chart.uv.len();
+    let mut referenced = vec![false; n];
+    for (t, tri) in chart.triangles.iter().enumerate() {
+        for &i in tri {
+            if i as usize >= n {
+                return Err(invalid(format!(
+                    "triangle {t} refers to vertex {i} but the chart has {n} UVs; fix the chart extraction"
+                )));
+            }
+            referenced[i as usize] = true;
+        }
+    }
+    let points: Vec<[f64; 2]> = chart
+        .uv
+        .iter()
+        .zip(&referenced)
+        .filter(|(_, &r)| r)
+        .map(|(p, _)| *p)
+        .collect();
+    let (lo, hi) = bounds(&points);
+    let centre = if points.is_empty() {
+        [0.0, 0.0]
+    } else {
+        [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])]
+    };
+    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    // UV area in coordinates normalized by the extent, so that finite inputs never overflow.
+    let mut unit_scale = 0.0;
+    let mut base_angle_rad = 0.0;
+    if extent > 0.0 && extent.is_finite() {
+        let norm = |p: [f64; 2]| [(p[0] - centre[0]) / extent, (p[1] - centre[1]) / extent];
+        let uv_area_normalized: f64 = chart
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| norm(chart.uv[i as usize]));
+                0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs()
+            })
+            .sum();
+        if uv_area_normalized > 0.0 && chart.area_m2 > 0.0 {
+            let s = (chart.area_m2 / uv_area_normalized).sqrt() / extent;
+            if s.is_finite() && s > 0.0 {
+                unit_scale = s;
+                let normalized: Vec<[f64; 2]> = points.iter().map(|&p| norm(p)).collect();
+                let hull = convex_hull(&normalized);
+                let (a, b) = diameter(&hull);
+                let v = [hull[b][0] - hull[a][0], hull[b][1] - hull[a][1]];
+                base_angle_rad = std::f64::consts::FRAC_PI_2 - v[1].atan2(v[0]);
+            }
+        }
+    }
+    Ok(PreparedChart {
+        centre,
+        unit_scale,
+        base_angle_rad,
+        area_m2: if unit_scale > 0.0 { chart.area_m2 } else { 0.0 },
+        has_vertices: !chart.uv.is_empty(),
+    })
+}
+
+/// Per-line extents of a footprint: for each column the first and last row, for each row the
+/// first and last column ([`EMPTY`] when the line is empty). Local texel indices.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Extents {
+    /// Per column `(min_row, max_row)`.
+    pub cols: Vec<(i32, i32)>,
+    /// Per row `(min_col, max_col)`.
+    pub rows: Vec<(i32, i32)>,
+}
+
+impl Extents {
+    fn of(mask: &Mask) -> Self {
+        let conv = |e: Option<(u32, u32)>| e.map_or(EMPTY, |(a, b)| (a as i32, b as i32));
+        Self {
+            cols: mask.column_extents().into_iter().map(conv).collect(),
+            rows: mask.row_extents().into_iter().map(conv).collect(),
+        }
+    }
+
+    /// The extents after the quarter turn `(x, y) → (height - y, x)` of a `width × height`
+    /// grid: texel `(i, j)` goes to `(height - 1 - j, i)`.
+    fn rotate90(&self) -> Self {
+        let h = self.rows.len() as i32;
+        let flip = |(a, b): (i32, i32)| {
+            if (a, b) == EMPTY {
+                EMPTY
+            } else {
+                (h - 1 - b, h - 1 - a)
+            }
+        };
+        Self {
+            // New column i' is old row h-1-i', same range of (new) rows = old columns.
+            cols: self.rows.iter().rev().copied().collect(),
+            // New row j' is old column j', its columns are h-1-(old rows).
+            rows: self.cols.iter().map(|&e| flip(e)).collect(),
+        }
+    }
+}
+
+/// One candidate orientation of a chart at a given density.
+#[derive(Debug, Clone)]
+pub struct Orientation {
+    /// `q = A · (uv - centre) + b`: local texel coordinates, rows `[a00, a01, b0]`, `[a10, a11, b1]`.
+    pub affine: [[f64; 3]; 2],
+    /// Grid width = width of `D`, texels.
+    pub width_texels: i64,
+    /// Grid height = height of `D`, texels.
+    pub height_texels: i64,
+    /// Extents of `D` (footprint dilated by the padding); `None` when the grid exceeds the page
+    /// (not rasterized).
+    pub dilated: Option<Extents>,
+    /// Extents of `F` (the conservative footprint itself), same grid.
+    pub footprint: Option<Extents>,
+}
+
+impl Orientation {
+    /// Local texel coordinates of a chart UV.
+    pub fn apply(&self, centre: [f64; 2], uv: [f64; 2]) -> [f64; 2] {
+        let (x, y) = (uv[0] - centre[0], uv[1] - centre[1]);
+        let a = &self.affine;
+        [
+            a[0][0] * x + a[0][1] * y + a[0][2],
+            a[1][0] * x + a[1][1] * y + a[1][2],
+        ]
+    }
+
+    fn rotate90(&self) -> Self {
+        let a = &self.affine;
+        let h = self.height_texels as f64;
+        // (x, y) → (h - y, x).
+        Self {
+            affine: [
+                [-a[1][0], -a[1][1], h - a[1][2]],
+                [a[0][0], a[0][1], a[0][2]],
+            ],
+            width_texels: self.height_texels,
+            height_texels: self.width_texels,
+            dilated: self.dilated.as_ref().map(Extents::rotate90),
+            footprint: self.footprint.as_ref().map(Extents::rotate90),
+        }
+    }
+}
+
+/// The `rotations` orientations of a chart at `texels_per_unit`, for a page of `page_texels`
+/// with `padding_texels`. Angle `k` is `base_angle_rad + 2πk / rotations`.
+pub fn orientations(
+    chart: &PackChart<'_>,
+    prep: &PreparedChart,
+    texels_per_unit: f64,
+    rotations: u32,
+    padding_texels: u32,
+    page_texels: [u32; 2],
+) -> Vec<Orientation> {
+    let rotations = rotations.max(1) as usize;
+    let quarter = rotations % 4 == 0 && prep.unit_scale > 0.0;
+    let direct = if quarter { rotations / 4 } else { rotations };
+    let mut out: Vec<Orientation> = (0..direct)
+        .map(|k| {
+            let angle =
+                prep.base_angle_rad + 2.0 * std::f64::consts::PI * k as f64 / rotations as f64;
+            orient(
+                chart,
+                prep,
+                angle,
+                texels_per_unit,
+                padding_texels,
+                page_texels,
+            )
+        })
+        .collect();
+    if quarter {
+        for k in direct..rotations {
+            let prev = &out[k - direct];
+            let o = if prev.dilated.is_some() {
+                prev.rotate90()
+            } else {
+                // Not rasterized (too large in that orientation): do the turned one directly.
+                let angle =
+                    prep.base_angle_rad + 2.0 * std::f64::consts::PI * k as f64 / rotations as f64;
+                orient(
+                    chart,
+                    prep,
+                    angle,
+                    texels_per_unit,
+                    padding_texels,
+                    page_texels,
+                )
+            };
+            out.push(o);
+        }
+    }
+    out
+}
+
+fn orient(
+    chart: &PackChart<'_>,
+    prep: &PreparedChart,
+    angle_rad: f64,
+    texels_per_unit: f64,
+    padding_texels: u32,
+    page_texels: [u32; 2],
+) -> Orientation {
+    let sigma = prep.unit_scale * texels_per_unit;
+    let sigma = if sigma.is_finite() { sigma } else { 0.0 };
+    let (s, c) = angle_rad.sin_cos();
+    let m = [[sigma * c, -sigma * s], [sigma * s, sigma * c]];
+    let rotated = |p: [f64; 2]| {
+        let (x, y) = (p[0] - prep.centre[0], p[1] - prep.centre[1]);
+        [m[0][0] * x + m[0][1] * y, m[1][0] * x + m[1][1] * y]
+    };
+    let (lo, hi) = bounds(
+        &chart
+            .triangles
+            .iter()
+            .flat_map(|t| t.iter().map(|&i| rotated(chart.uv[i as usize])))
+            .collect::<Vec<_>>(),
+    );
+    let (lo, hi) = if lo[0] <= hi[0] {
+        (lo, hi)
+    } else {
+        ([0.0; 2], [0.0; 2])
+    };
+    let pad = f64::from(padding_texels);
+    let mut affine = [[m[0][0], m[0][1], 0.0], [m[1][0], m[1][1], 0.0]];
+    let mut dims = [0i64; 2];
+    for axis in 0..2 {
+        let e = hi[axis] - lo[axis];
+        let n = (e + 2.0 * LAYOUT_EPS_TEXELS).ceil().max(1.0);
+        // Saturating: a chart far larger than any page is only measured, never rasterized.
+        dims[axis] = if n < 1e15 {
+            n as i64 + 2 * i64::from(padding_texels)
+        } else {
+            i64::MAX / 4
+        };
+        affine[axis][2] = pad + 0.5 * (n - e) - lo[axis];
+    }
+    let mut o = Orientation {
+        affine,
+        width_texels: dims[0],
+        height_texels: dims[1],
+        dilated: None,
+        footprint: None,
+    };
+    if dims[0] > i64::from(page_texels[0]) || dims[1] > i64::from(page_texels[1]) {
+        return o;
+    }
+    let mut mask = Mask::new(dims[0] as u32, dims[1] as u32);
+    rasterize_conservative(
+        &mut mask,
+        chart
+            .triangles
+            .iter()
+            .map(|t| t.map(|i| o.apply(prep.centre, chart.uv[i as usize]))),
+    );
+    if chart.triangles.is_empty() {
+        // A chart without triangles still gets its one texel.
+        mask.set_span(padding_texels, padding_texels, padding_texels);
+    }
+    o.footprint = Some(Extents::of(&mask));
+    o.dilated = Some(Extents::of(&mask.dilate(padding_texels)));
+    o
+}
+
+fn bounds(points: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for p in points {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo, hi)
+}
+
+fn cross(o: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+}
+
+/// Convex hull, counter-clockwise, no collinear points (Andrew's monotone chain). Cost:
+/// O(n log n).
+fn convex_hull(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let mut p: Vec<[f64; 2]> = points.to_vec();
+    p.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+    p.dedup();
+    if p.len() < 3 {
+        return p;
+    }
+    let mut hull: Vec<[f64; 2]> = Vec::with_capacity(2 * p.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &[f64; 2]>> = if pass == 0 {
+            Box::new(p.iter())
+        } else {
+            Box::new(p.iter().rev())
+        };
+        for &q in iter {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(q);
+        }
+        hull.pop();
+    }
+    hull
+}
+
+/// The farthest pair of a convex polygon (rotating calipers over antipodal pairs). Cost: O(h).
+fn diameter(hull: &[[f64; 2]]) -> (usize, usize) {
+    let n = hull.len();
+    let d2 = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2);
+    match n {
+        0 | 1 => return (0, 0),
+        2 => return (0, 1),
+        _ => {}
+    }
+    let mut best = (0, 1, d2(hull[0], hull[1]));
+    let mut j = 1;
+    for i in 0..n {
+        let ni = (i + 1) % n;
+        // Advance j while the triangle (i, ni, j+1) is larger: j+1 is farther from edge i.
+        let mut steps = 0;
+        while steps < n
+            && cross(hull[i], hull[ni], hull[(j + 1) % n]) > cross(hull[i], hull[ni], hull[j])
+        {
+            j = (j + 1) % n;
+            steps += 1;
+        }
+        for (a, b) in [(i, j), (ni, j)] {
+            let d = d2(hull[a], hull[b]);
+            if d > best.2 {
+                best = (a, b, d);
+            }
+        }
+    }
+    (best.0, best.1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn diameter_matches_brute_force() {
+        let mut state = 12345u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..50 {
+            let pts: Vec<[f64; 2]> = (0..40).map(|_| [next() * 3.0, next()]).collect();
+            let hull = convex_hull(&pts);
+            let (a, b) = diameter(&hull);
+            let d = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
+            let brute = pts
+                .iter()
+                .flat_map(|p| pts.iter().map(move |q| (*p, *q)))
+                .map(|(p, q)| d(p, q))
+                .fold(0.0, f64::max);
+            assert!((d(hull[a], hull[b]) - brute).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn quarter_turn_extents_equal_a_direct_rasterization() {
+        // An L-shaped chart: its 90° footprint derived by re-indexing equals rasterizing it
+        // turned (up to where the layout centres it, which is the same by symmetry here).
+        let uv = [
+            [0.0, 0.0],
+            [3.0, 0.0],
+            [3.0, 1.0],
+            [1.0, 1.0],
+            [1.0, 2.0],
+            [0.0, 2.0],
+        ];
+        let tris = [[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 5]];
+        let chart = PackChart {
+            uv: &uv,
+            triangles: &tris,
+            area_m2: 4.0,
+        };
+        let prep = prepare_chart(0, &chart).unwrap();
+        let four = orientations(&chart, &prep, 7.3, 4, 2, [1024, 1024]);
+        let turned = orient(
+            &chart,
+            &prep,
+            prep.base_angle_rad + std::f64::consts::FRAC_PI_2,
+            7.3,
+            2,
+            [1024, 1024],
+        );
+        assert_eq!(four[1].width_texels, turned.width_texels);
+        assert_eq!(four[1].height_texels, turned.height_texels);
+        assert_eq!(four[1].footprint, turned.footprint);
+        assert_eq!(four[1].dilated, turned.dilated);
+        // And every vertex lands at the same place.
+        for &p in &uv {
+            let (a, b) = (four[1].apply(prep.centre, p), turned.apply(prep.centre, p));
+            assert!((a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9);
+        }
+    }
+}

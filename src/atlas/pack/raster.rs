@@ -1,0 +1,487 @@
+//! Conservative rasterization of a chart onto the texel grid, and Chebyshev dilation.
+//!
+//! Purpose: the footprint the packer reasons about. [`rasterize_conservative`] marks every
+//! texel that any triangle touches, texel `(i, j)` being the *closed* square
+//! `[i, i+1] × [j, j+1]`; [`Mask::dilate`] grows a footprint by `r` texels in the Chebyshev
+//! (square) metric, so that "the dilated footprint of A misses the footprint of B" is exactly
+//! "every texel of A is at Chebyshev distance > r from every texel of B".
+//!
+//! Why that is enough for the evaluator (`../shared/eval/atlas_eval.py`): it samples texel
+//! centres. A centre that a triangle covers lies in the triangle, so its texel touches the
+//! triangle and is in the conservative footprint. The footprint is a superset of any sampled
+//! coverage, also after the `f32` rounding of the written UVs (that moves vertices by far less
+//! than the half texel separating an untouched texel's centre from the triangle).
+//!
+//! Exactness: per texel row, the triangle is clipped to the closed slab `[j, j+1]` and the
+//! x-range of the clipped (convex) polygon is taken; a texel of the row touches the triangle iff
+//! its column interval meets that range (a convex set meets a box of the slab iff their
+//! x-projections meet). Every range is widened by [`TOUCH_EPS_TEXELS`] so that rounding can only
+//! add texels, never drop one.
+//!
+//! Preconditions: triangle corners finite, in local texel units (`_texels`). Corners outside the
+//! mask are clipped to it (never a panic); callers lay charts out inside their mask.
+//!
+//! Cost: O(Σ over triangles of the rows it spans + texels set); [`Mask::dilate`] is
+//! O(width × height / 64 × r).
+//!
+//! Reference: lscm-2002 §4 (discretized horizons "with texture resolution"), isocharts-2004 §6.
+
+/// Widening of every touch test, texels: rounding may add a texel, never drop one.
+pub const TOUCH_EPS_TEXELS: f64 = 1e-4;
+
+/// A bit mask over a `width × height` texel grid, row-major, 64 texels per word.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Mask {
+    width: u32,
+    height: u32,
+    words_per_row: usize,
+    bits: Vec<u64>,
+}
+
+impl Mask {
+    /// An empty mask. Cost: `width × height / 8` bytes.
+    pub fn new(width: u32, height: u32) -> Self {
+        let words_per_row = (width as usize).div_ceil(64);
+        Self {
+            width,
+            height,
+            words_per_row,
+            bits: vec![0; words_per_row * height as usize],
+        }
+    }
+
+    /// Width in texels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in texels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Whether texel `(x, y)` is set; `false` outside the mask.
+    pub fn get(&self, x: i64, y: i64) -> bool {
+        if x < 0 || y < 0 || x >= self.width as i64 || y >= self.height as i64 {
+            return false;
+        }
+        let w = self.bits[y as usize * self.words_per_row + (x as usize >> 6)];
+        (w >> (x & 63)) & 1 == 1
+    }
+
+    /// Sets texels `x0..=x1` of row `y` (clipped to the mask).
+    pub fn set_span(&mut self, y: u32, x0: u32, x1: u32) {
+        if y >= self.height || self.width == 0 {
+            return;
+        }
+        let x1 = x1.min(self.width - 1);
+        if x0 > x1 {
+            return;
+        }
+        let row = &mut self.bits[y as usize * self.words_per_row..][..self.words_per_row];
+        let (w0, w1) = ((x0 >> 6) as usize, (x1 >> 6) as usize);
+        let lo = u64::MAX << (x0 & 63);
+        let hi = u64::MAX >> (63 - (x1 & 63));
+        if w0 == w1 {
+            row[w0] |= lo & hi;
+        } else {
+            row[w0] |= lo;
+            for w in &mut row[w0 + 1..w1] {
+                *w = u64::MAX;
+            }
+            row[w1] |= hi;
+        }
+    }
+
+    /// Number of set texels.
+    pub fn count(&self) -> u64 {
+        self.bits.iter().map(|w| u64::from(w.count_ones())).sum()
+    }
+
+    /// The mask grown by `r` texels in the Chebyshev metric, clipped to the same grid (callers
+    /// leave an `r`-texel margin). Cost: O(width × height / 64 × r).
+    pub fn dilate(&self, r: u32) -> Mask {
+        if r == 0 {
+            return self.clone();
+        }
+        let wpr = self.words_per_row;
+        // Horizontal pass: OR of the row shifted by -r ..= r, word by word with carries.
+        let mut horizontal = self.clone();
+        for y in 0..self.height as usize {
+            let row = &self.bits[y * wpr..][..wpr];
+            let out = &mut horizontal.bits[y * wpr..][..wpr];
+            for s in 1..=r as usize {
+                let (ws, bs) = (s / 64, (s % 64) as u32);
+                for k in 0..wpr {
+                    // Towards higher columns: bit x goes to x + s.
+                    if k >= ws {
+                        let mut v = row[k - ws] << bs;
+                        if bs > 0 && k > ws {
+                            v |= row[k - ws - 1] >> (64 - bs);
+                        }
+                        out[k] |= v;
+                    }
+                    // Towards lower columns: bit x goes to x - s.
+                    if k + ws < wpr {
+                        let mut v = row[k + ws] >> bs;
+                        if bs > 0 && k + ws + 1 < wpr {
+                            v |= row[k + ws + 1] << (64 - bs);
+                        }
+                        out[k] |= v;
+                    }
+                }
+            }
+        }
+        horizontal.clear_padding_bits();
+        // Vertical pass: row y is the OR of rows y - r ..= y + r (word-wise).
+        let mut out = Mask::new(self.width, self.height);
+        for y in 0..self.height as usize {
+            let lo = y.saturating_sub(r as usize);
+            let hi = (y + r as usize).min(self.height as usize - 1);
+            for src in lo..=hi {
+                for k in 0..wpr {
+                    out.bits[y * wpr + k] |= horizontal.bits[src * wpr + k];
+                }
+            }
+        }
+        out
+    }
+
+    /// Clears the bits past `width` in each row's last word.
+    fn clear_padding_bits(&mut self) {
+        let rem = self.width % 64;
+        if rem == 0 || self.words_per_row == 0 {
+            return;
+        }
+        let keep = (1u64 << rem) - 1;
+        for y in 0..self.height as usize {
+            self.bits[y * self.words_per_row + self.words_per_row - 1] &= keep;
+        }
+    }
+
+    /// The runs of set texels of row `y`, as inclusive `(first, last)` columns, left to right.
+    pub fn runs(&self, y: u32) -> Vec<(u32, u32)> {
+        let mut out = Vec::new();
+        if y >= self.height {
+            return out;
+        }
+        let row = &self.bits[y as usize * self.words_per_row..][..self.words_per_row];
+        let mut start: Option<u32> = None;
+        for x in 0..self.width {
+            let set = (row[(x >> 6) as usize] >> (x & 63)) & 1 == 1;
+            match (set, start) {
+                (true, None) => start = Some(x),
+                (false, Some(s)) => {
+                    out.push((s, x - 1));
+                    start = None;
+                }
+                _ => {}
+            }
+        }
+        if let Some(s) = start {
+            out.push((s, self.width - 1));
+        }
+        out
+    }
+
+    /// Per column, the first and last set row (`None` for an empty column). Cost:
+    /// O(height × width / 64 + width).
+    pub fn column_extents(&self) -> Vec<Option<(u32, u32)>> {
+        let wpr = self.words_per_row;
+        let mut first = vec![u32::MAX; self.width as usize];
+        let mut last = vec![0u32; self.width as usize];
+        let mut seen = vec![0u64; wpr];
+        for y in 0..self.height {
+            let row = &self.bits[y as usize * wpr..][..wpr];
+            for k in 0..wpr {
+                let mut new = row[k] & !seen[k];
+                seen[k] |= row[k];
+                while new != 0 {
+                    let b = new.trailing_zeros();
+                    first[k * 64 + b as usize] = y;
+                    new &= new - 1;
+                }
+            }
+        }
+        seen.iter_mut().for_each(|w| *w = 0);
+        for y in (0..self.height).rev() {
+            let row = &self.bits[y as usize * wpr..][..wpr];
+            for k in 0..wpr {
+                let mut new = row[k] & !seen[k];
+                seen[k] |= row[k];
+                while new != 0 {
+                    let b = new.trailing_zeros();
+                    last[k * 64 + b as usize] = y;
+                    new &= new - 1;
+                }
+            }
+        }
+        first
+            .iter()
+            .zip(&last)
+            .map(|(&a, &b)| (a != u32::MAX).then_some((a, b)))
+            .collect()
+    }
+
+    /// Per row, the first and last set column (`None` for an empty row). Cost:
+    /// O(height × width / 64).
+    pub fn row_extents(&self) -> Vec<Option<(u32, u32)>> {
+        let wpr = self.words_per_row;
+        (0..self.height as usize)
+            .map(|y| {
+                let row = &self.bits[y * wpr..][..wpr];
+                let a = row.iter().position(|&w| w != 0)?;
+                let b = row.iter().rposition(|&w| w != 0)?;
+                Some((
+                    (a * 64) as u32 + row[a].trailing_zeros(),
+                    (b * 64) as u32 + 63 - row[b].leading_zeros(),
+                ))
+            })
+            .collect()
+    }
+}
+
+/// Marks in `mask` every texel that a triangle touches (closed texel squares, module doc).
+/// Triangles are given by their corners in the mask's texel units.
+///
+/// Cost: O(rows spanned) per triangle plus the spans written.
+pub fn rasterize_conservative(mask: &mut Mask, triangles: impl IntoIterator<Item = [[f64; 2]; 3]>) {
+    let (w, h) = (mask.width() as f64, mask.height() as f64);
+    if mask.width() == 0 || mask.height() == 0 {
+        return;
+    }
+    for tri in triangles {
+        if tri.iter().any(|p| !(p[0].is_finite() && p[1].is_finite())) {
+            continue;
+        }
+        let ymin = tri.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min) - TOUCH_EPS_TEXELS;
+        let ymax = tri.iter().map(|p| p[1]).fold(f64::NEG_INFINITY, f64::max) + TOUCH_EPS_TEXELS;
+        // Rows whose closed slab [j, j+1] meets [ymin, ymax]: ceil(ymin) - 1 ..= floor(ymax).
+        let j0 = (ymin.ceil() - 1.0).max(0.0);
+        let j1 = ymax.floor().min(h - 1.0);
+        if j0 > j1 {
+            continue;
+        }
+        let (j0, j1) = (j0 as u32, j1 as u32);
+        for j in j0..=j1 {
+            let (lo, hi) = (
+                j as f64 - TOUCH_EPS_TEXELS,
+                j as f64 + 1.0 + TOUCH_EPS_TEXELS,
+            );
+            let Some((xa, xb)) = slab_x_range(&tri, lo, hi) else {
+                continue;
+            };
+            let xa = xa - TOUCH_EPS_TEXELS;
+            let xb = xb + TOUCH_EPS_TEXELS;
+            // Columns whose closed interval [i, i+1] meets [xa, xb].
+            let i0 = (xa.ceil() - 1.0).max(0.0);
+            let i1 = xb.floor().min(w - 1.0);
+            if i0 > i1 {
+                continue;
+            }
+            mask.set_span(j, i0 as u32, i1 as u32);
+        }
+    }
+}
+
+/// The x-range of the triangle clipped to the slab `lo <= y <= hi`, or `None` when they do not
+/// meet. Takes corners inside the slab and the crossings of the edges with both slab lines.
+fn slab_x_range(tri: &[[f64; 2]; 3], lo: f64, hi: f64) -> Option<(f64, f64)> {
+    let mut xmin = f64::INFINITY;
+    let mut xmax = f64::NEG_INFINITY;
+    let mut take = |x: f64| {
+        xmin = xmin.min(x);
+        xmax = xmax.max(x);
+    };
+    for k in 0..3 {
+        let a = tri[k];
+        let b = tri[(k + 1) % 3];
+        if a[1] >= lo && a[1] <= hi {
+            take(a[0]);
+        }
+        let (ya, yb) = (a[1], b[1]);
+        if ya != yb {
+            for line in [lo, hi] {
+                if (ya < line) != (yb < line) {
+                    let t = ((line - ya) / (yb - ya)).clamp(0.0, 1.0);
+                    take(a[0] + t * (b[0] - a[0]));
+                }
+            }
+        }
+    }
+    (xmin <= xmax).then_some((xmin, xmax))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Brute-force oracle: does the closed triangle meet the closed square [i,i+1]×[j,j+1]?
+    /// Separating axis test over the two box axes and the three edge normals (exact geometry).
+    fn touches(tri: &[[f64; 2]; 3], i: i64, j: i64) -> bool {
+        let bx = [i as f64, i as f64 + 1.0];
+        let by = [j as f64, j as f64 + 1.0];
+        let corners = [
+            [bx[0], by[0]],
+            [bx[1], by[0]],
+            [bx[1], by[1]],
+            [bx[0], by[1]],
+        ];
+        let mut axes = vec![[1.0, 0.0], [0.0, 1.0]];
+        for k in 0..3 {
+            let a = tri[k];
+            let b = tri[(k + 1) % 3];
+            axes.push([a[1] - b[1], b[0] - a[0]]);
+        }
+        axes.iter().all(|ax| {
+            let proj = |p: &[f64; 2]| p[0] * ax[0] + p[1] * ax[1];
+            let (t0, t1) = tri
+                .iter()
+                .map(proj)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |a, v| {
+                    (a.0.min(v), a.1.max(v))
+                });
+            let (c0, c1) = corners
+                .iter()
+                .map(proj)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |a, v| {
+                    (a.0.min(v), a.1.max(v))
+                });
+            t0 <= c1 && c0 <= t1
+        })
+    }
+
+    fn xorshift(state: &mut u64) -> f64 {
+        *state ^= *state << 13;
+        *state ^= *state >> 7;
+        *state ^= *state << 17;
+        (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    #[test]
+    fn conservative_raster_never_misses_a_touched_texel_and_adds_only_near_ones() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        for case in 0..400 {
+            let mut tri = [[0.0; 2]; 3];
+            for p in &mut tri {
+                // Some corners on exact texel lines and corners, to hit the closed boundaries.
+                let snap = case % 3 == 0;
+                let mut c = |s: &mut u64| {
+                    let v = 1.0 + 10.0 * xorshift(s);
+                    if snap {
+                        (v * 2.0).round() / 2.0
+                    } else {
+                        v
+                    }
+                };
+                *p = [c(&mut state), c(&mut state)];
+            }
+            let mut mask = Mask::new(14, 14);
+            rasterize_conservative(&mut mask, [tri]);
+            for j in 0..14 {
+                for i in 0..14 {
+                    let oracle = touches(&tri, i, j);
+                    if oracle {
+                        assert!(
+                            mask.get(i, j),
+                            "case {case}: touched texel ({i},{j}) missed for {tri:?}"
+                        );
+                    }
+                    if mask.get(i, j) && !oracle {
+                        // Only texels within the widening of the exact footprint may be extra.
+                        let near = [
+                            (-1, 0),
+                            (1, 0),
+                            (0, -1),
+                            (0, 1),
+                            (-1, -1),
+                            (1, 1),
+                            (-1, 1),
+                            (1, -1),
+                        ]
+                        .iter()
+                        .any(|(di, dj)| touches(&tri, i + di, j + dj));
+                        assert!(near, "case {case}: texel ({i},{j}) far from {tri:?}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_triangle_on_texel_lines_touches_the_neighbours_it_meets() {
+        // The closed square [2,3]² touches all 16 texels of [1,4]² in the closed sense.
+        let mut mask = Mask::new(8, 8);
+        rasterize_conservative(
+            &mut mask,
+            [
+                [[2.0, 2.0], [3.0, 2.0], [3.0, 3.0]],
+                [[2.0, 2.0], [3.0, 3.0], [2.0, 3.0]],
+            ],
+        );
+        for j in 0..8 {
+            for i in 0..8 {
+                assert_eq!(
+                    mask.get(i, j),
+                    (1..=3).contains(&i) && (1..=3).contains(&j),
+                    "({i},{j})"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn dilation_is_chebyshev_and_extents_are_per_line() {
+        let mut m = Mask::new(70, 9);
+        m.set_span(4, 3, 3);
+        m.set_span(4, 66, 66);
+        let d = m.dilate(2);
+        for y in 0..9 {
+            for x in 0..70 {
+                let near = |cx: i64| (x - cx).abs() <= 2 && (y - 4i64).abs() <= 2;
+                assert_eq!(d.get(x, y), near(3) || near(66), "({x},{y})");
+            }
+        }
+        assert_eq!(d.count(), 50);
+        assert_eq!(m.runs(4), vec![(3, 3), (66, 66)]);
+        // Across word boundaries and with a radius beyond a word, against a brute force.
+        let mut big = Mask::new(300, 5);
+        for x in [0u32, 63, 64, 127, 190, 299] {
+            big.set_span(2, x, x);
+        }
+        big.set_span(0, 100, 140);
+        for r in [1u32, 5, 63, 64, 70] {
+            let d = big.dilate(r);
+            for y in 0..5i64 {
+                for x in 0..300i64 {
+                    let want = (0..5i64).any(|yy| {
+                        (0..300i64).any(|xx| {
+                            big.get(xx, yy)
+                                && (xx - x).abs() <= r as i64
+                                && (yy - y).abs() <= r as i64
+                        })
+                    });
+                    assert_eq!(d.get(x, y), want, "r {r} ({x},{y})");
+                }
+            }
+            let ext = d.column_extents();
+            let rows = d.row_extents();
+            for x in 0..300u32 {
+                let col: Vec<u32> = (0..5).filter(|&y| d.get(x as i64, y as i64)).collect();
+                assert_eq!(
+                    ext[x as usize],
+                    col.first().map(|&a| (a, *col.last().unwrap()))
+                );
+            }
+            for y in 0..5u32 {
+                let row: Vec<u32> = (0..300).filter(|&x| d.get(x as i64, y as i64)).collect();
+                assert_eq!(
+                    rows[y as usize],
+                    row.first().map(|&a| (a, *row.last().unwrap()))
+                );
+            }
+        }
+        assert_eq!(d.column_extents()[3], Some((2, 6)));
+        assert_eq!(d.row_extents()[4], Some((1, 68)));
+    }
+}

@@ -1,0 +1,390 @@
+//! The stage guarantees of `pack_charts`, checked with the independent checker of
+//! [`super::test_charts`] (centre sampling, the evaluator's definitions).
+use std::ops::ControlFlow;
+
+use super::test_charts::{
+    as_pack_charts, check_packing, disc, l_shape, mixed_set, realistic_set, strip, triangle,
+    OwnedChart, PackCheck,
+};
+use super::*;
+
+fn go(_: (usize, usize)) -> ControlFlow<()> {
+    ControlFlow::Continue(())
+}
+
+fn pack(charts: &[OwnedChart], options: &PackOptions) -> (Packing, PackCheck) {
+    let borrowed = as_pack_charts(charts);
+    let packing = pack_charts(&borrowed, options, &mut go).unwrap_or_else(|e| panic!("{e}"));
+    let check = check_packing(&borrowed, &packing, options);
+    (packing, check)
+}
+
+fn assert_guarantees(check: &PackCheck, what: &str) {
+    assert_eq!(check.overlap_texels, 0, "{what}: overlap {check:?}");
+    assert_eq!(
+        check.padding_violation_texels, 0,
+        "{what}: padding {check:?}"
+    );
+    assert_eq!(
+        check.edge_violation_texels, 0,
+        "{what}: page edge {check:?}"
+    );
+    assert_eq!(check.out_of_range_uvs, 0, "{what}: range {check:?}");
+    assert!(check.density_spread < 1e-9, "{what}: density {check:?}");
+    assert!(
+        check.covered_texels > 0,
+        "{what}: nothing covered {check:?}"
+    );
+}
+
+#[test]
+fn mixed_shapes_fit_one_page_with_padding_and_good_efficiency() {
+    let charts = mixed_set(60, 3);
+    let options = PackOptions::default();
+    let (packing, check) = pack(&charts, &options);
+    assert_eq!(packing.num_pages, 1);
+    assert_guarantees(&check, "mixed 60");
+    // Floor well under what the packer reaches (see tests/pack_bench.rs for the figures).
+    assert!(check.efficiency > 0.55, "efficiency {check:?}");
+}
+
+#[test]
+fn realistic_lscm_charts_pack_tightly() {
+    let charts = realistic_set(8);
+    let options = PackOptions::default();
+    let (_, check) = pack(&charts, &options);
+    assert_guarantees(&check, "realistic 48");
+    assert!(check.efficiency > 0.55, "efficiency {check:?}");
+}
+
+#[test]
+fn every_rotation_count_and_padding_keeps_the_guarantees() {
+    let charts = mixed_set(25, 11);
+    for (rotations, padding) in [(1, 0), (3, 1), (4, 4), (16, 2), (7, 3)] {
+        let options = PackOptions {
+            width_texels: 300,
+            height_texels: 200,
+            padding_texels: padding,
+            rotations,
+            ..PackOptions::default()
+        };
+        let (_, check) = pack(&charts, &options);
+        assert_guarantees(&check, &format!("rotations {rotations} padding {padding}"));
+    }
+}
+
+#[test]
+fn packing_is_deterministic() {
+    let charts = mixed_set(40, 5);
+    let options = PackOptions::default();
+    let (a, _) = pack(&charts, &options);
+    let (b, _) = pack(&charts, &options);
+    assert_eq!(a, b);
+}
+
+#[test]
+fn fixed_density_opens_pages_and_keeps_each_page_clean() {
+    let charts = mixed_set(40, 9);
+    let options = PackOptions {
+        width_texels: 256,
+        height_texels: 256,
+        density: TexelDensity::TexelsPerUnit(60.0),
+        ..PackOptions::default()
+    };
+    let (packing, check) = pack(&charts, &options);
+    assert!(
+        packing.num_pages > 1,
+        "expected several pages, got {}",
+        packing.num_pages
+    );
+    assert_eq!(packing.texels_per_unit, 60.0);
+    assert_guarantees(&check, "multi-page");
+    // The density is the one asked for: UV area in texels² = area_m2 × 60².
+    let borrowed = as_pack_charts(&charts);
+    let c = &borrowed[0];
+    let uv = &packing.charts[0].uv;
+    let a: f64 = c
+        .triangles
+        .iter()
+        .map(|t| {
+            let [p, q, r] = t.map(|i| [uv[i as usize][0] * 256.0, uv[i as usize][1] * 256.0]);
+            0.5 * ((q[0] - p[0]) * (r[1] - p[1]) - (r[0] - p[0]) * (q[1] - p[1])).abs()
+        })
+        .sum();
+    assert!((a / (c.area_m2 * 3600.0) - 1.0).abs() < 1e-9);
+}
+
+#[test]
+fn a_chart_larger_than_a_page_is_reported() {
+    let charts = vec![disc(16, 1.0), disc(16, 20.0)];
+    let options = PackOptions {
+        width_texels: 128,
+        height_texels: 128,
+        density: TexelDensity::TexelsPerUnit(10.0),
+        ..PackOptions::default()
+    };
+    let err = pack_charts(&as_pack_charts(&charts), &options, &mut go).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            PackError::ChartTooLarge {
+                chart: 1,
+                page_texels: [128, 128],
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+}
+
+#[test]
+fn invalid_options_say_what_to_use() {
+    let charts = vec![disc(8, 1.0)];
+    let bad = [
+        PackOptions {
+            width_texels: 0,
+            ..PackOptions::default()
+        },
+        PackOptions {
+            height_texels: MAX_PAGE_TEXELS + 1,
+            ..PackOptions::default()
+        },
+        PackOptions {
+            rotations: 0,
+            ..PackOptions::default()
+        },
+        PackOptions {
+            padding_texels: 512,
+            ..PackOptions::default()
+        },
+        PackOptions {
+            density: TexelDensity::TexelsPerUnit(f64::NAN),
+            ..PackOptions::default()
+        },
+        PackOptions {
+            density: TexelDensity::TexelsPerUnit(-1.0),
+            ..PackOptions::default()
+        },
+    ];
+    for o in bad {
+        match pack_charts(&as_pack_charts(&charts), &o, &mut go) {
+            Err(PackError::InvalidOption { detail, .. }) => {
+                assert!(detail.contains("use"), "{detail}")
+            }
+            other => panic!("{o:?}: {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn invalid_charts_are_errors_not_panics() {
+    let uv = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+    let nan = [[0.0, 0.0], [f64::NAN, 0.0], [0.0, 1.0]];
+    let cases = [
+        PackChart {
+            uv: &uv,
+            triangles: &[[0, 1, 3]],
+            area_m2: 1.0,
+        },
+        PackChart {
+            uv: &nan,
+            triangles: &[[0, 1, 2]],
+            area_m2: 1.0,
+        },
+        PackChart {
+            uv: &uv,
+            triangles: &[[0, 1, 2]],
+            area_m2: -1.0,
+        },
+        PackChart {
+            uv: &uv,
+            triangles: &[[0, 1, 2]],
+            area_m2: f64::INFINITY,
+        },
+    ];
+    for c in cases {
+        let err = pack_charts(&[c], &PackOptions::default(), &mut go).unwrap_err();
+        assert!(
+            matches!(err, PackError::InvalidChart { chart: 0, .. }),
+            "{err:?}"
+        );
+    }
+}
+
+#[test]
+fn degenerate_charts_get_a_texel_and_no_nan() {
+    let collinear = OwnedChart {
+        uv: vec![[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]],
+        triangles: vec![[0, 1, 2]],
+        area_m2: 0.5,
+    };
+    let no_area = OwnedChart {
+        area_m2: 0.0,
+        ..triangle([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    };
+    let no_triangles = OwnedChart {
+        uv: vec![[3.0, 4.0]],
+        triangles: vec![],
+        area_m2: 0.0,
+    };
+    let empty = OwnedChart {
+        uv: vec![],
+        triangles: vec![],
+        area_m2: 0.0,
+    };
+    let unreferenced = OwnedChart {
+        uv: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1e9, -1e9]],
+        ..triangle([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    };
+    let charts = vec![
+        collinear,
+        disc(12, 1.0),
+        no_area,
+        no_triangles,
+        empty,
+        unreferenced,
+    ];
+    for density in [TexelDensity::FitToPage, TexelDensity::TexelsPerUnit(50.0)] {
+        let options = PackOptions {
+            width_texels: 256,
+            height_texels: 256,
+            density,
+            ..PackOptions::default()
+        };
+        let (packing, check) = pack(&charts, &options);
+        assert_guarantees(&check, &format!("degenerate {density:?}"));
+        assert!(packing.texels_per_unit.is_finite() && packing.texels_per_unit > 0.0);
+        assert!(packing
+            .charts
+            .iter()
+            .all(|c| c.uv.iter().all(|q| q[0].is_finite() && q[1].is_finite())));
+        assert_eq!(packing.charts[4].uv.len(), 0);
+    }
+    // Only degenerate charts.
+    let only = vec![OwnedChart {
+        area_m2: 0.0,
+        ..triangle([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    }];
+    let (p, c) = pack(&only, &PackOptions::default());
+    assert_eq!(c.out_of_range_uvs, 0);
+    assert!(p.texels_per_unit > 0.0);
+}
+
+#[test]
+fn thousands_of_tiny_charts_fit_or_are_refused() {
+    let charts: Vec<OwnedChart> = (0..3000)
+        .map(|i| {
+            let s = 1.0 + (i % 7) as f64;
+            triangle([[0.0, 0.0], [s, 0.0], [0.3 * s, s]])
+        })
+        .collect();
+    let options = PackOptions {
+        width_texels: 512,
+        height_texels: 512,
+        ..PackOptions::default()
+    };
+    let (packing, check) = pack(&charts, &options);
+    assert_eq!(packing.num_pages, 1);
+    assert_guarantees(&check, "3000 triangles");
+    // 3000 charts each needing at least (1 + 2)² texels cannot fit 64×64 with padding 2.
+    let small = PackOptions {
+        width_texels: 64,
+        height_texels: 64,
+        ..PackOptions::default()
+    };
+    let err = pack_charts(&as_pack_charts(&charts), &small, &mut go).unwrap_err();
+    assert!(
+        matches!(err, PackError::DoesNotFit { charts: 3000, .. }),
+        "{err:?}"
+    );
+}
+
+#[test]
+fn the_checker_catches_overlap_and_padding_violations() {
+    let charts = vec![disc(16, 1.0), l_shape(2.0, 0.5), strip(3.0, 0.4, 6, 0.0)];
+    let options = PackOptions {
+        width_texels: 128,
+        height_texels: 128,
+        ..PackOptions::default()
+    };
+    let borrowed = as_pack_charts(&charts);
+    let packing = pack_charts(&borrowed, &options, &mut go).unwrap();
+    assert_guarantees(&check_packing(&borrowed, &packing, &options), "baseline");
+    // Stack chart 1 onto chart 0: overlap.
+    let mut stacked = packing.clone();
+    stacked.charts[1].uv =
+        stacked.charts[0].uv[..stacked.charts[1].uv.len().min(stacked.charts[0].uv.len())].to_vec();
+    let c0 = &packing.charts[0].uv;
+    let centre = [
+        c0.iter().map(|p| p[0]).sum::<f64>() / c0.len() as f64,
+        c0.iter().map(|p| p[1]).sum::<f64>() / c0.len() as f64,
+    ];
+    let c1 = &packing.charts[1].uv;
+    let lo = [
+        c1.iter().map(|p| p[0]).fold(1.0, f64::min),
+        c1.iter().map(|p| p[1]).fold(1.0, f64::min),
+    ];
+    stacked.charts[1].uv = c1
+        .iter()
+        .map(|p| [p[0] - lo[0] + centre[0], p[1] - lo[1] + centre[1]])
+        .collect();
+    assert!(check_packing(&borrowed, &stacked, &options).overlap_texels > 0);
+    // Move chart 2 until it is within the padding of another chart, one texel at a time.
+    let mut found = false;
+    for step in 1..128 {
+        let mut moved = packing.clone();
+        for (dx, dy) in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)] {
+            moved.charts[2].uv = packing.charts[2]
+                .uv
+                .iter()
+                .map(|p| {
+                    [
+                        p[0] + dx * step as f64 / 128.0,
+                        p[1] + dy * step as f64 / 128.0,
+                    ]
+                })
+                .collect();
+            let c = check_packing(&borrowed, &moved, &options);
+            if c.padding_violation_texels > 0 && c.overlap_texels == 0 {
+                found = true;
+            }
+        }
+        if found {
+            break;
+        }
+    }
+    assert!(found, "no padding violation detected by moving a chart");
+}
+
+#[test]
+fn cancellation_stops_with_cancelled() {
+    let charts = mixed_set(10, 1);
+    let mut calls = 0;
+    let err = pack_charts(
+        &as_pack_charts(&charts),
+        &PackOptions::default(),
+        &mut |_| {
+            calls += 1;
+            if calls > 3 {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        },
+    )
+    .unwrap_err();
+    assert_eq!(err, PackError::Cancelled);
+}
+
+#[test]
+fn non_square_pages_follow_the_page_aspect() {
+    let charts = mixed_set(50, 21);
+    let options = PackOptions {
+        width_texels: 1024,
+        height_texels: 256,
+        ..PackOptions::default()
+    };
+    let (_, check) = pack(&charts, &options);
+    assert_guarantees(&check, "1024×256");
+    assert!(check.efficiency > 0.45, "{check:?}");
+}
