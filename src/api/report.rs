@@ -101,6 +101,9 @@ pub struct PipelineJson {
     pub charts_hierarchical: usize,
     /// Texel density used, texels per model unit.
     pub texels_per_unit: f64,
+    /// Charts made only of degenerate faces (zero area or a repeated vertex): not packed, their
+    /// corners sit on a coincident vertex of a packed chart (zero UV area).
+    pub degenerate_charts: usize,
 }
 
 /// Wall-clock seconds per step.
@@ -182,6 +185,7 @@ impl ReportJson {
                 charts_direct: s.charts_direct,
                 charts_hierarchical: s.charts_hierarchical,
                 texels_per_unit: s.texels_per_unit,
+                degenerate_charts: s.degenerate_charts,
             },
             timings_s: TimingsJsonS {
                 build: timings.build_s,

@@ -31,7 +31,7 @@ pub use pack::{pack_charts, PackChart, PackError, PackOptions, TexelDensity};
 pub use progress::{NoProgress, Progress, Stage};
 
 use crate::mesh::{TriangleMesh, VertexId};
-use segment::{segment_charts, validate_charts, ChartDefect, SegmentError};
+use segment::{segment_charts, validate_charts_with_monitor, ChartDefect, SegmentError};
 
 /// Errors of [`generate`]. Each says what is wrong and how to fix it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -71,6 +71,10 @@ impl From<SegmentError> for AtlasError {
             SegmentError::InvalidOption { option, detail } => {
                 AtlasError::InvalidOption { option, detail }
             }
+            // Only `generate`'s own stages can be cancelled, and it maps this with the stage.
+            SegmentError::Cancelled => AtlasError::Cancelled {
+                stage: Stage::Parameterize,
+            },
         }
     }
 }
@@ -104,6 +108,9 @@ pub struct PipelineStats {
     pub charts_hierarchical: usize,
     /// The texel density used, texels per model unit.
     pub texels_per_unit: f64,
+    /// Charts made only of degenerate faces (zero area or a repeated vertex): not packed, their
+    /// corners take the UV of a coincident vertex of a packed chart (see [`generate`]).
+    pub degenerate_charts: usize,
 }
 
 /// The atlas of one mesh.
@@ -127,6 +134,13 @@ pub struct Atlas {
 }
 
 /// Runs the whole pipeline on `mesh`: segment → parameterize + validate → pack → measure.
+///
+/// Degenerate faces: a chart made only of faces with zero area or a repeated vertex (the mesh
+/// builder isolates the latter, so each arrives as a chart of its own) is not packed: it covers
+/// nothing in 3-D, so it must cover nothing in UV. Each of its corners takes the UV (and page) of
+/// a vertex of a packed chart at the bit-identical position in the same glTF mesh, or the page
+/// origin when there is none; its UV image is then a point or a segment (zero UV area: never a
+/// flip, never an overlap), and a face lying along an edge of a packed chart joins that chart.
 ///
 /// Progress is reported per stage through `progress`, which can cancel at every checkpoint
 /// ([`AtlasError::Cancelled`]). Deterministic: the same mesh and options give the same bits.
@@ -157,7 +171,15 @@ pub fn generate(
         progress.advance(Stage::Parameterize, 0, seg.num_charts()),
         Stage::Parameterize,
     )?;
-    let validated = validate_charts(mesh, &seg, &options.validate)?;
+    let validated = validate_charts_with_monitor(mesh, &seg, &options.validate, &mut |(d, t)| {
+        progress.advance(Stage::Parameterize, d, t)
+    })
+    .map_err(|e| match e {
+        SegmentError::Cancelled => AtlasError::Cancelled {
+            stage: Stage::Parameterize,
+        },
+        other => other.into(),
+    })?;
     let charts = &validated.segmentation.charts;
     check(
         progress.advance(Stage::Parameterize, charts.len(), charts.len()),
@@ -219,10 +241,18 @@ pub fn generate(
     }
     progress.stage_finished(Stage::Parameterize);
 
-    // 3. Pack.
+    // 3. Pack. Charts made only of degenerate faces (zero area, or a repeated vertex: such faces
+    //    are isolated by the mesh builder and arrive as charts of their own) have nothing to
+    //    texture; they take no page space and get their UVs afterwards (`place_degenerate`).
     progress.stage_started(Stage::Pack);
-    let pack_input: Vec<PackChart<'_>> = (0..charts.len())
-        .map(|i| PackChart {
+    let degenerate: Vec<bool> = charts
+        .iter()
+        .map(|faces| faces.iter().all(|&f| mesh.face_degeneracy(f).is_some()))
+        .collect();
+    let packed: Vec<usize> = (0..charts.len()).filter(|&i| !degenerate[i]).collect();
+    let pack_input: Vec<PackChart<'_>> = packed
+        .iter()
+        .map(|&i| PackChart {
             uv: validated.maps[i].as_ref().map_or(&[][..], |(m, _)| &m.uv),
             triangles: &chart_triangles[i],
             area_m2: chart_area_m2[i],
@@ -232,22 +262,34 @@ pub fn generate(
         progress.advance(Stage::Pack, done, total)
     })?;
     stats.texels_per_unit = packing.texels_per_unit;
+    stats.degenerate_charts = charts.len() - packed.len();
     let mut corner_uvs = vec![[[0.0f32; 2]; 3]; mesh.num_faces()];
     let mut face_chart = vec![0u32; mesh.num_faces()];
     let mut face_page = vec![0u32; mesh.num_faces()];
-    let mut chart_page = Vec::with_capacity(charts.len());
-    for (i, faces) in charts.iter().enumerate() {
-        let placed = &packing.charts[i];
-        chart_page.push(placed.page);
-        for (&f, t) in faces.iter().zip(&chart_triangles[i]) {
+    let mut chart_page = vec![0u32; charts.len()];
+    for (placed, &i) in packing.charts.iter().zip(&packed) {
+        chart_page[i] = placed.page;
+        for (&f, t) in charts[i].iter().zip(&chart_triangles[i]) {
             corner_uvs[f.index()] = t.map(|l| {
                 let p = placed.uv[l as usize];
                 [p[0] as f32, p[1] as f32]
             });
-            face_chart[f.index()] = i as u32;
             face_page[f.index()] = placed.page;
         }
     }
+    for (i, faces) in charts.iter().enumerate() {
+        for &f in faces {
+            face_chart[f.index()] = i as u32;
+        }
+    }
+    place_degenerate(
+        mesh,
+        charts,
+        &degenerate,
+        &mut corner_uvs,
+        &mut face_page,
+        &mut chart_page,
+    );
     progress.stage_finished(Stage::Pack);
 
     // 4. Measure.
@@ -274,4 +316,76 @@ pub fn generate(
         stats,
         report,
     })
+}
+
+/// UVs for the corners of degenerate charts (see [`generate`]). Each degenerate face follows one
+/// packed chart: the lowest chart with a vertex at the position of its first matched corner;
+/// its other corners take that chart's vertex at their position when it has one, else the first
+/// corner's UV. A face with no match at all collapses to `[0, 0]` on page 0.
+fn place_degenerate(
+    mesh: &TriangleMesh,
+    charts: &[Vec<crate::mesh::FaceId>],
+    degenerate: &[bool],
+    corner_uvs: &mut [[[f32; 2]; 3]],
+    face_page: &mut [u32],
+    chart_page: &mut [u32],
+) {
+    if !degenerate.iter().any(|&d| d) {
+        return;
+    }
+    type Key = (u32, [u64; 3]);
+    let key = |v: VertexId| -> Key {
+        let p = mesh
+            .position(v)
+            .map(|x| if x == 0.0 { 0 } else { x.to_bits() });
+        (mesh.vertex_weld_group(v), p)
+    };
+    // (position key, chart) → (page, uv), one entry per vertex of each packed chart.
+    let mut known: Vec<(Key, u32, u32, [f32; 2])> = Vec::new();
+    for (i, faces) in charts.iter().enumerate() {
+        if degenerate[i] {
+            continue;
+        }
+        for &f in faces {
+            for (k, v) in mesh.face_vertices(f).into_iter().enumerate() {
+                known.push((
+                    key(v),
+                    i as u32,
+                    face_page[f.index()],
+                    corner_uvs[f.index()][k],
+                ));
+            }
+        }
+    }
+    known.sort_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)));
+    known.dedup_by(|a, b| (a.0, a.1) == (b.0, b.1));
+    // The lowest chart at `k`, or the entry of chart `c` at `k`.
+    let first_at = |k: &Key| {
+        let j = known.partition_point(|e| e.0 < *k);
+        known.get(j).filter(|e| e.0 == *k)
+    };
+    let in_chart = |k: &Key, c: u32| {
+        known
+            .binary_search_by(|e| (e.0, e.1).cmp(&(*k, c)))
+            .ok()
+            .map(|j| &known[j])
+    };
+    for (i, faces) in charts.iter().enumerate() {
+        if !degenerate[i] {
+            continue;
+        }
+        let mut page = None;
+        for &f in faces {
+            let keys = mesh.face_vertices(f).map(key);
+            let Some(&(_, chart, p, uv0)) = keys.iter().find_map(first_at) else {
+                corner_uvs[f.index()] = [[0.0; 2]; 3];
+                face_page[f.index()] = 0;
+                continue;
+            };
+            corner_uvs[f.index()] = keys.map(|k| in_chart(&k, chart).map_or(uv0, |e| e.3));
+            face_page[f.index()] = p;
+            page.get_or_insert(p);
+        }
+        chart_page[i] = page.unwrap_or(0);
+    }
 }
