@@ -13,7 +13,15 @@ use serde_json::Value;
 /// Starts the binary; (child, base URL read from its first stdout line).
 fn start(data: &std::path::Path) -> (Child, String) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_texatlas"))
-        .args(["serve", "--bind", "127.0.0.1:0", "--workers", "1", "--lease-s", "2"])
+        .args([
+            "serve",
+            "--bind",
+            "127.0.0.1:0",
+            "--workers",
+            "1",
+            "--lease-s",
+            "2",
+        ])
         .arg("--data-dir")
         .arg(data)
         .env("RUST_LOG", "warn")
@@ -66,7 +74,10 @@ async fn kill_9_while_running_then_restart_finishes_every_job_once() {
         if !list["jobs"].as_array().unwrap().is_empty() {
             break;
         }
-        assert!(start_wait.elapsed() < Duration::from_secs(60), "no job started");
+        assert!(
+            start_wait.elapsed() < Duration::from_secs(60),
+            "no job started"
+        );
         tokio::time::sleep(Duration::from_millis(20)).await;
     }
     child.kill().expect("SIGKILL");

@@ -32,12 +32,19 @@ async fn upload_poll_download_with_the_fake_processor() {
     let location = r.headers()["location"].to_str().unwrap().to_string();
     let job: Value = r.json().await.unwrap();
     assert_schema("Job", &job);
-    assert_eq!(location, format!("/v1/jobs/{}", job["id"].as_str().unwrap()));
+    assert_eq!(
+        location,
+        format!("/v1/jobs/{}", job["id"].as_str().unwrap())
+    );
     assert_eq!(job["status"], "queued");
     assert_eq!(job["options"], json!({"padding_texels": 4}));
     assert_eq!(job["triangles"], 12);
     // Not ready yet is a 409 (the fake takes ~240 ms) unless it was very fast.
-    let early = c.get(s.url(&format!("{location}/result"))).send().await.unwrap();
+    let early = c
+        .get(s.url(&format!("{location}/result")))
+        .send()
+        .await
+        .unwrap();
     if early.status().as_u16() != 200 {
         assert_problem(early, 409, "result_not_ready").await;
     }
@@ -46,24 +53,50 @@ async fn upload_poll_download_with_the_fake_processor() {
     assert_eq!(done["attempts"], 1);
     assert_eq!(done["progress"]["fraction"], 1.0);
     assert!(done["finished_at"].is_string() && done["expires_at"].is_string());
-    let result = c.get(s.url(&format!("{location}/result"))).send().await.unwrap();
+    let result = c
+        .get(s.url(&format!("{location}/result")))
+        .send()
+        .await
+        .unwrap();
     assert_eq!(result.status().as_u16(), 200);
     assert_eq!(result.headers()["content-type"], "model/gltf-binary");
-    assert_eq!(result.bytes().await.unwrap().to_vec(), glb, "the fake echoes the input");
+    assert_eq!(
+        result.bytes().await.unwrap().to_vec(),
+        glb,
+        "the fake echoes the input"
+    );
     let gltf = c
         .get(s.url(&format!("{location}/result?format=gltf")))
         .send()
         .await
         .unwrap();
     assert_eq!(gltf.headers()["content-type"], "model/gltf+json");
-    let report = c.get(s.url(&format!("{location}/report"))).send().await.unwrap();
+    let report = c
+        .get(s.url(&format!("{location}/report")))
+        .send()
+        .await
+        .unwrap();
     assert_eq!(report.json::<Value>().await.unwrap(), json!({"fake": true}));
-    let png = c.get(s.url(&format!("{location}/preview.png"))).send().await.unwrap();
+    let png = c
+        .get(s.url(&format!("{location}/preview.png")))
+        .send()
+        .await
+        .unwrap();
     assert_eq!(png.headers()["content-type"], "image/png");
     assert!(png.bytes().await.unwrap().starts_with(b"\x89PNG"));
     // Metrics saw it.
-    let metrics = c.get(s.url("/metrics")).send().await.unwrap().text().await.unwrap();
-    assert!(metrics.contains("texatlas_jobs{state=\"succeeded\"} 1"), "{metrics}");
+    let metrics = c
+        .get(s.url("/metrics"))
+        .send()
+        .await
+        .unwrap()
+        .text()
+        .await
+        .unwrap();
+    assert!(
+        metrics.contains("texatlas_jobs{state=\"succeeded\"} 1"),
+        "{metrics}"
+    );
     assert!(metrics.contains("texatlas_triangles_processed_total 2"));
     assert!(metrics.contains("texatlas_http_request_duration_seconds_count{method=\"POST\",route=\"/v1/jobs\",status=\"202\"} 1"));
     // Delete a finished job: 204, then 404.
@@ -71,7 +104,11 @@ async fn upload_poll_download_with_the_fake_processor() {
     assert_eq!(del.status().as_u16(), 204);
     let gone = c.get(s.url(&location)).send().await.unwrap();
     assert_problem(gone, 404, "job_not_found").await;
-    assert!(!s.data_dir().join("blobs/jobs").join(done["id"].as_str().unwrap()).exists());
+    assert!(!s
+        .data_dir()
+        .join("blobs/jobs")
+        .join(done["id"].as_str().unwrap())
+        .exists());
     s.stop().await.unwrap();
 }
 
@@ -92,7 +129,12 @@ async fn multipart_gltf_with_separate_bin_and_options_part() {
             reqwest::multipart::Part::bytes(bin.clone()).file_name("grid data.bin"),
         )
         .text("options", r#"{"rotations": 4}"#);
-    let r = c.post(s.url("/v1/jobs")).multipart(form).send().await.unwrap();
+    let r = c
+        .post(s.url("/v1/jobs"))
+        .multipart(form)
+        .send()
+        .await
+        .unwrap();
     assert_eq!(r.status().as_u16(), 202, "{:?}", r.text().await);
     let job: Value = r.json().await.unwrap();
     assert_eq!(job["options"], json!({"rotations": 4}));
@@ -101,7 +143,10 @@ async fn multipart_gltf_with_separate_bin_and_options_part() {
     assert_eq!(done["status"], "succeeded");
     // The worker got the .gltf itself (the fake echoes it) — resolved with the stored .bin.
     let result = c
-        .get(s.url(&format!("/v1/jobs/{}/result?format=glb", job["id"].as_str().unwrap())))
+        .get(s.url(&format!(
+            "/v1/jobs/{}/result?format=glb",
+            job["id"].as_str().unwrap()
+        )))
         .send()
         .await
         .unwrap();
@@ -112,12 +157,22 @@ async fn multipart_gltf_with_separate_bin_and_options_part() {
         "asset",
         reqwest::multipart::Part::bytes(gltf).file_name("grid.gltf"),
     );
-    let r = c.post(s.url("/v1/jobs")).multipart(form).send().await.unwrap();
+    let r = c
+        .post(s.url("/v1/jobs"))
+        .multipart(form)
+        .send()
+        .await
+        .unwrap();
     let p = assert_problem(r, 422, "resource_missing").await;
     assert_eq!(p["defects"][0]["json_path"], "/buffers/0/uri");
     // No asset part.
     let form = reqwest::multipart::Form::new().text("options", "{}");
-    let r = c.post(s.url("/v1/jobs")).multipart(form).send().await.unwrap();
+    let r = c
+        .post(s.url("/v1/jobs"))
+        .multipart(form)
+        .send()
+        .await
+        .unwrap();
     assert_problem(r, 400, "missing_asset").await;
     s.stop().await.unwrap();
 }
@@ -146,7 +201,14 @@ async fn idempotency_key_replays_the_same_job() {
     let other = send("k-1", grid_glb(3)).await.unwrap();
     assert_problem(other, 422, "idempotency_key_reused").await;
     // Exactly one job exists.
-    let list: Value = c.get(s.url("/v1/jobs")).send().await.unwrap().json().await.unwrap();
+    let list: Value = c
+        .get(s.url("/v1/jobs"))
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
     assert_eq!(list["jobs"].as_array().unwrap().len(), 1);
     s.stop().await.unwrap();
 }
@@ -196,8 +258,18 @@ async fn list_is_newest_first_with_cursor_pages_and_status_filter() {
         .await
         .unwrap();
     assert_eq!(queued["jobs"], json!([]));
-    for bad in ["?status=done", "?cursor=xyz", "?limit=0", "?limit=101", "?sort=asc"] {
-        let r = c.get(s.url(&format!("/v1/jobs{bad}"))).send().await.unwrap();
+    for bad in [
+        "?status=done",
+        "?cursor=xyz",
+        "?limit=0",
+        "?limit=101",
+        "?sort=asc",
+    ] {
+        let r = c
+            .get(s.url(&format!("/v1/jobs{bad}")))
+            .send()
+            .await
+            .unwrap();
         assert_eq!(r.status().as_u16(), 400, "{bad}");
     }
     s.stop().await.unwrap();
@@ -217,7 +289,10 @@ fn sse_events(text: &str) -> Vec<(String, Value)> {
             }
         }
         if !event.is_empty() {
-            out.push((event, serde_json::from_str(&data).expect("event data is JSON")));
+            out.push((
+                event,
+                serde_json::from_str(&data).expect("event data is JSON"),
+            ));
         }
     }
     out
@@ -247,10 +322,18 @@ async fn events_arrive_in_order_and_end_with_the_job() {
         .unwrap()
         .starts_with("text/event-stream"));
     // The stream ends by itself after the terminal status (bounded by the deadline).
-    let text = tokio::time::timeout(DEADLINE, r.text()).await.unwrap().unwrap();
+    let text = tokio::time::timeout(DEADLINE, r.text())
+        .await
+        .unwrap()
+        .unwrap();
     let events = sse_events(&text);
     assert!(events.len() >= 3, "{text}");
-    let rank = |s: &str| ["queued", "running", "succeeded"].iter().position(|x| *x == s).unwrap();
+    let rank = |s: &str| {
+        ["queued", "running", "succeeded"]
+            .iter()
+            .position(|x| *x == s)
+            .unwrap()
+    };
     let mut last_rank = 0;
     let mut last_fraction = 0.0;
     for (i, (kind, data)) in events.iter().enumerate() {
@@ -259,7 +342,10 @@ async fn events_arrive_in_order_and_end_with_the_job() {
         let r = rank(status);
         assert!(r >= last_rank, "status went back at event {i}: {text}");
         if kind == "status" {
-            assert!(i == 0 || r > last_rank, "a status event without a change: {text}");
+            assert!(
+                i == 0 || r > last_rank,
+                "a status event without a change: {text}"
+            );
         } else {
             assert_eq!(kind, "progress");
             assert_eq!(r, last_rank);
@@ -362,19 +448,33 @@ async fn bad_requests_are_problems_with_the_right_status() {
     // 413: declared and streamed (chunked, no Content-Length).
     let r = submit_glb(&c, &s, vec![0u8; 5000], "").await;
     assert_problem(r, 413, "upload_too_large").await;
-    let chunks: Vec<Result<Vec<u8>, std::io::Error>> = (0..10).map(|_| Ok(vec![b'x'; 1000])).collect();
+    let chunks: Vec<Result<Vec<u8>, std::io::Error>> =
+        (0..10).map(|_| Ok(vec![b'x'; 1000])).collect();
     let r = c
         .post(s.url("/v1/jobs"))
         .header("content-type", "model/gltf-binary")
-        .body(reqwest::Body::wrap_stream(futures_util::stream::iter(chunks)))
+        .body(reqwest::Body::wrap_stream(futures_util::stream::iter(
+            chunks,
+        )))
         .send()
         .await
         .unwrap();
     assert_problem(r, 413, "upload_too_large").await;
     let big = reqwest::multipart::Form::new()
-        .part("asset", reqwest::multipart::Part::bytes(vec![1u8; 3000]).file_name("a.glb"))
-        .part("x.bin", reqwest::multipart::Part::bytes(vec![1u8; 3000]).file_name("x.bin"));
-    let r = c.post(s.url("/v1/jobs")).multipart(big).send().await.unwrap();
+        .part(
+            "asset",
+            reqwest::multipart::Part::bytes(vec![1u8; 3000]).file_name("a.glb"),
+        )
+        .part(
+            "x.bin",
+            reqwest::multipart::Part::bytes(vec![1u8; 3000]).file_name("x.bin"),
+        );
+    let r = c
+        .post(s.url("/v1/jobs"))
+        .multipart(big)
+        .send()
+        .await
+        .unwrap();
     assert_problem(r, 413, "upload_too_large").await;
     // 415.
     let r = c
@@ -385,7 +485,12 @@ async fn bad_requests_are_problems_with_the_right_status() {
         .await
         .unwrap();
     assert_problem(r, 415, "unsupported_media_type").await;
-    let r = c.post(s.url("/v1/jobs")).body("hello").send().await.unwrap();
+    let r = c
+        .post(s.url("/v1/jobs"))
+        .body("hello")
+        .send()
+        .await
+        .unwrap();
     assert_problem(r, 415, "unsupported_media_type").await;
     // 422: a truncated GLB, a GLB whose length field is below 12 (the gltf crate pitfall).
     let mut glb = fixture("Box.glb");
@@ -414,10 +519,19 @@ async fn bad_requests_are_problems_with_the_right_status() {
     let r = c.get(s.url("/v1/jobs/..%2F..%2Fetc")).send().await.unwrap();
     assert_problem(r, 404, "job_not_found").await;
     // Nothing was queued by any of these.
-    let list: Value = c.get(s.url("/v1/jobs")).send().await.unwrap().json().await.unwrap();
+    let list: Value = c
+        .get(s.url("/v1/jobs"))
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
     assert_eq!(list["jobs"], json!([]));
     // Spool files of refused uploads are gone.
-    let spool: Vec<_> = std::fs::read_dir(s.data_dir().join("spool")).unwrap().collect();
+    let spool: Vec<_> = std::fs::read_dir(s.data_dir().join("spool"))
+        .unwrap()
+        .collect();
     assert!(spool.is_empty(), "{spool:?}");
     s.stop().await.unwrap();
 }
@@ -447,9 +561,20 @@ async fn hostile_buffer_uris_are_refused_without_opening_anything() {
         assert_eq!(p["defects"][0]["json_path"], "/buffers/0/uri", "{uri}");
         // Also as multipart, with a part that claims that name: still refused.
         let form = reqwest::multipart::Form::new()
-            .part("asset", reqwest::multipart::Part::bytes(body).file_name("a.gltf"))
-            .part("evil", reqwest::multipart::Part::bytes(vec![0u8; 64]).file_name(uri.to_string()));
-        let r = c.post(s.url("/v1/jobs")).multipart(form).send().await.unwrap();
+            .part(
+                "asset",
+                reqwest::multipart::Part::bytes(body).file_name("a.gltf"),
+            )
+            .part(
+                "evil",
+                reqwest::multipart::Part::bytes(vec![0u8; 64]).file_name(uri.to_string()),
+            );
+        let r = c
+            .post(s.url("/v1/jobs"))
+            .multipart(form)
+            .send()
+            .await
+            .unwrap();
         assert_eq!(r.status().as_u16(), 422, "{uri}");
     }
     // A truncated GLB in multipart form too.
@@ -457,7 +582,12 @@ async fn hostile_buffer_uris_are_refused_without_opening_anything() {
         "asset",
         reqwest::multipart::Part::bytes(fixture("Box.glb")[..100].to_vec()).file_name("a.glb"),
     );
-    let r = c.post(s.url("/v1/jobs")).multipart(form).send().await.unwrap();
+    let r = c
+        .post(s.url("/v1/jobs"))
+        .multipart(form)
+        .send()
+        .await
+        .unwrap();
     assert_eq!(r.status().as_u16(), 422);
     s.stop().await.unwrap();
 }
@@ -529,7 +659,15 @@ async fn api_keys_isolate_owners() {
         .unwrap();
     assert_eq!(list["jobs"].as_array().unwrap().len(), 1);
     // Operational endpoints stay open.
-    assert_eq!(c.get(s.url("/healthz")).send().await.unwrap().status().as_u16(), 200);
+    assert_eq!(
+        c.get(s.url("/healthz"))
+            .send()
+            .await
+            .unwrap()
+            .status()
+            .as_u16(),
+        200
+    );
     s.stop().await.unwrap();
 }
 
@@ -576,7 +714,12 @@ async fn operational_endpoints_and_the_openapi_contract() {
     assert_eq!(served, file, "the served document is proto/openapi.json");
     let doc: Value = serde_json::from_str(&file).unwrap();
     // Every route the router serves is in the document, and the reverse.
-    let mut paths: Vec<&str> = doc["paths"].as_object().unwrap().keys().map(String::as_str).collect();
+    let mut paths: Vec<&str> = doc["paths"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .map(String::as_str)
+        .collect();
     paths.sort();
     assert_eq!(
         paths,
@@ -593,12 +736,22 @@ async fn operational_endpoints_and_the_openapi_contract() {
             "/v1/jobs/{id}/result",
         ]
     );
-    let health: Value = c.get(s.url("/healthz")).send().await.unwrap().json().await.unwrap();
+    let health: Value = c
+        .get(s.url("/healthz"))
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
     assert_schema("Status", &health);
     let ready = c.get(s.url("/readyz")).send().await.unwrap();
     assert_eq!(ready.status().as_u16(), 200);
     let r = c.get(s.url("/metrics")).send().await.unwrap();
-    assert!(r.headers()["content-type"].to_str().unwrap().starts_with("text/plain"));
+    assert!(r.headers()["content-type"]
+        .to_str()
+        .unwrap()
+        .starts_with("text/plain"));
     let text = r.text().await.unwrap();
     for name in [
         "texatlas_jobs{state=\"queued\"}",
@@ -639,7 +792,10 @@ async fn cors_when_configured() {
         .send()
         .await
         .unwrap();
-    assert_eq!(r.headers()["access-control-allow-origin"], "https://dash.example");
+    assert_eq!(
+        r.headers()["access-control-allow-origin"],
+        "https://dash.example"
+    );
     let r = c
         .get(s.url("/v1/jobs"))
         .header("origin", "https://evil.example")
@@ -668,9 +824,18 @@ async fn graceful_shutdown_requeues_running_jobs_and_a_restart_finishes_them() {
     )
     .await;
     let c = client();
-    let job = submit_ok(&c, &s, fixture("Box.glb"), &format!("?max_charts={UNTIL_CANCELLED}")).await;
+    let job = submit_ok(
+        &c,
+        &s,
+        fixture("Box.glb"),
+        &format!("?max_charts={UNTIL_CANCELLED}"),
+    )
+    .await;
     let id = job["id"].as_str().unwrap().to_string();
-    poll_until(&c, &s.url(&format!("/v1/jobs/{id}")), DEADLINE, |j| j["status"] == "running").await;
+    poll_until(&c, &s.url(&format!("/v1/jobs/{id}")), DEADLINE, |j| {
+        j["status"] == "running"
+    })
+    .await;
     s.stop().await.unwrap();
     // Same data dir, a processor that finishes: the job was given back, not lost or failed.
     let s = Server::start_with(
@@ -684,7 +849,10 @@ async fn graceful_shutdown_requeues_running_jobs_and_a_restart_finishes_them() {
     // The restarted job has UNTIL_CANCELLED options; cancel it and check it was back in play.
     let url = s.url(&format!("/v1/jobs/{id}"));
     let j = poll_until(&c, &url, DEADLINE, |j| j["status"] == "running").await;
-    assert_eq!(j["attempts"], 1, "a graceful release does not count as an attempt");
+    assert_eq!(
+        j["attempts"], 1,
+        "a graceful release does not count as an attempt"
+    );
     c.delete(&url).send().await.unwrap();
     let j = poll_until(&c, &url, DEADLINE, is_terminal).await;
     assert_eq!(j["status"], "cancelled");

@@ -351,7 +351,12 @@ pub async fn submit_glb(
 }
 
 /// Submits and returns the 202 body.
-pub async fn submit_ok(client: &reqwest::Client, server: &Server, glb: Vec<u8>, query: &str) -> Value {
+pub async fn submit_ok(
+    client: &reqwest::Client,
+    server: &Server,
+    glb: Vec<u8>,
+    query: &str,
+) -> Value {
     let r = submit_glb(client, server, glb, query).await;
     assert_eq!(r.status().as_u16(), 202, "{:?}", r.text().await);
     let body: Value = r.json().await.expect("job JSON");
