@@ -85,9 +85,7 @@ pub async fn serve(
         tracing::info!("shutdown: no new connections or jobs");
         let _ = signal_tx.send(true);
     };
-    let served = axum::serve(listener, app)
-        .with_graceful_shutdown(graceful)
-        .await;
+    let served = http::serve(listener, app, graceful).await;
     let _ = stop_tx.send(true);
     pool.shutdown(config.shutdown_grace).await;
     tracing::info!("shutdown complete");

@@ -18,9 +18,13 @@ tokio::task_local! {
 #[derive(Debug, Clone)]
 pub(crate) struct InternalCause(pub String);
 
-/// An error response (module doc).
+/// An error response (module doc). Boxed: handlers return `Result<_, ApiError>` everywhere,
+/// and the problem body is a few hundred bytes.
 #[derive(Debug)]
-pub struct ApiError {
+pub struct ApiError(Box<Inner>);
+
+#[derive(Debug)]
+struct Inner {
     status: StatusCode,
     problem: ApiProblemJson,
     retry_after_s: Option<u64>,
@@ -32,13 +36,13 @@ impl ApiError {
     /// An error with `status`, `code` and `detail`.
     pub fn new(status: StatusCode, code: &str, detail: impl Into<String>) -> ApiError {
         let title = status.canonical_reason().unwrap_or("Error");
-        ApiError {
+        ApiError(Box::new(Inner {
             status,
             problem: ApiProblemJson::new(status.as_u16(), code, title, detail),
             retry_after_s: None,
             internal: None,
             challenge: false,
-        }
+        }))
     }
 
     /// 400: the request is malformed.
@@ -65,21 +69,21 @@ impl ApiError {
         defects: Vec<AssetDefectJson>,
     ) -> Self {
         let mut e = ApiError::new(StatusCode::UNPROCESSABLE_ENTITY, code, detail);
-        e.problem.defects = defects;
+        e.0.problem.defects = defects;
         e
     }
 
     /// 401 with a `WWW-Authenticate: Bearer` challenge.
     pub fn unauthorized(detail: impl Into<String>) -> ApiError {
         let mut e = ApiError::new(StatusCode::UNAUTHORIZED, "unauthorized", detail);
-        e.challenge = true;
+        e.0.challenge = true;
         e
     }
 
     /// 503 with `Retry-After`.
     pub fn unavailable(code: &str, detail: impl Into<String>, retry_after_s: u64) -> ApiError {
         let mut e = ApiError::new(StatusCode::SERVICE_UNAVAILABLE, code, detail);
-        e.retry_after_s = Some(retry_after_s.max(1));
+        e.0.retry_after_s = Some(retry_after_s.max(1));
         e
     }
 
@@ -91,19 +95,19 @@ impl ApiError {
             "the service failed to handle this request; retry later, and quote the request_id \
              when reporting it",
         );
-        e.internal = Some(cause.to_string());
+        e.0.internal = Some(cause.to_string());
         e
     }
 
     /// Attaches a cause for the log (not shown to the client).
     pub fn with_cause(mut self, cause: impl std::fmt::Display) -> ApiError {
-        self.internal = Some(cause.to_string());
+        self.0.internal = Some(cause.to_string());
         self
     }
 
     /// The status.
     pub fn status(&self) -> StatusCode {
-        self.status
+        self.0.status
     }
 }
 
@@ -115,25 +119,26 @@ impl From<crate::storage::StoreError> for ApiError {
 
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
-        let mut problem = self.problem;
+        let this = *self.0;
+        let mut problem = this.problem;
         problem.request_id = REQUEST_ID.try_with(Clone::clone).ok();
         let body = serde_json::to_vec(&problem).unwrap_or_else(|_| b"{}".to_vec());
-        let mut response = (self.status, body).into_response();
+        let mut response = (this.status, body).into_response();
         let headers = response.headers_mut();
         headers.insert(
             header::CONTENT_TYPE,
             HeaderValue::from_static("application/problem+json"),
         );
-        if let Some(s) = self.retry_after_s {
+        if let Some(s) = this.retry_after_s {
             headers.insert(header::RETRY_AFTER, HeaderValue::from(s));
         }
-        if self.challenge {
+        if this.challenge {
             headers.insert(
                 header::WWW_AUTHENTICATE,
                 HeaderValue::from_static("Bearer realm=\"texatlas\""),
             );
         }
-        if let Some(cause) = self.internal {
+        if let Some(cause) = this.internal {
             response.extensions_mut().insert(InternalCause(cause));
         }
         response

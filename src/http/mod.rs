@@ -118,6 +118,18 @@ pub fn router(
     app
 }
 
+/// Serves `app` on `listener` until `shutdown` resolves; then stops accepting and waits for
+/// in-flight requests (event streams end on the router's shutdown flag).
+pub async fn serve(
+    listener: tokio::net::TcpListener,
+    app: Router,
+    shutdown: impl std::future::Future<Output = ()> + Send + 'static,
+) -> std::io::Result<()> {
+    axum::serve(listener, app)
+        .with_graceful_shutdown(shutdown)
+        .await
+}
+
 fn cors_layer(origins: &[String]) -> Option<CorsLayer> {
     if origins.is_empty() {
         return None;

@@ -163,7 +163,7 @@ pub enum DeleteOutcome {
     NotFound,
     /// The job was queued and is now cancelled, or was running and will stop at its next
     /// checkpoint (`cancel_requested`), or had already ended and is deleted.
-    Cancelled(JobRecord),
+    Cancelled(Box<JobRecord>),
     /// The job had ended; it and its blobs are deleted.
     Deleted,
 }
@@ -187,7 +187,7 @@ pub enum ArtifactOutcome {
     /// No such job (for this owner), or its results were already swept.
     NotFound,
     /// The job has not succeeded (yet, or ever).
-    NotReady(JobRecord),
+    NotReady(Box<JobRecord>),
     /// The bytes.
     Bytes(Vec<u8>),
 }
@@ -542,7 +542,7 @@ impl JobService {
                         blocking(move || blobs.delete_prefix(&key(format!("jobs/{id}/input"))?))
                             .await;
                 }
-                Ok(DeleteOutcome::Cancelled(j))
+                Ok(DeleteOutcome::Cancelled(Box::new(j)))
             }
             None => Ok(DeleteOutcome::NotFound),
         }
@@ -564,7 +564,7 @@ impl JobService {
             .filter(|_| job.status == JobStatus::Succeeded)
             .and_then(|t| serde_json::from_str::<ResultManifest>(t).ok())
         else {
-            return Ok(ArtifactOutcome::NotReady(job));
+            return Ok(ArtifactOutcome::NotReady(Box::new(job)));
         };
         let k = key(match which {
             Artifact::ResultGlb => manifest.glb,
