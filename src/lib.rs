@@ -29,6 +29,12 @@
 //!   encode (split vertices at UV seams, carry everything else through).
 //! - [`bench`](mod@bench): `texatlas bench` measurements (not core: uses time, processes, files).
 //! - [`inspect`]: the `texatlas inspect` report (plain data, built from `gltf_io` + `mesh`).
+//! - [`storage`]: the persistent state of the service behind two traits, `JobStore` (a
+//!   lease-based job queue) and `BlobStore`; SQLite and local files today. The only SQL.
+//! - [`jobs`]: submitting, running and reading jobs: the job service, the worker pool (the
+//!   pipeline on the blocking pool, progress, cancel, panics, time limits), the sweeper, metrics.
+//! - [`http`]: the only module that knows axum: the `/v1` API, problem+json errors, auth.
+//! - [`service`]: the composition root of `texatlas serve`.
 //! - [`api`]: the only serde wire types, each mirroring a document in `proto/`, with explicit
 //!   `From` conversions from the domain types.
 //!
@@ -39,6 +45,10 @@
 //!   bits whatever the thread count. `tests/architecture.rs` checks the `use` lines.
 //! - Only `gltf_io` knows glTF. The decoder never touches the filesystem or the network: external
 //!   buffers and images are handed to it by the caller as named byte blobs.
+//! - SQL lives only in `storage`, axum only in `http`; `jobs` and `http` reach the database
+//!   through the `JobStore` trait (checked by `tests/architecture.rs`).
+//! - An accepted job is never lost: its inputs are stored before its row, and it leaves
+//!   `running` only through a fenced write or an expired lease.
 //! - Units are in names and types: model space is in the asset's units (`_m`, `_m2`), UVs are
 //!   normalized to \[0,1\], angles are in radians (`_rad`).
 pub mod api;
