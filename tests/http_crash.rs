@@ -60,18 +60,19 @@ async fn kill_9_while_running_then_restart_finishes_every_job_once() {
         let job: Value = r.json().await.unwrap();
         ids.push(job["id"].as_str().unwrap().to_string());
     }
-    // Wait until a job is running, then kill -9.
+    // Wait until a job is running with others still queued, then kill -9.
     let start_wait = Instant::now();
+    let count = |status: &'static str| {
+        let c = c.clone();
+        let url = format!("{base}/v1/jobs?status={status}");
+        async move {
+            let list: Value = c.get(url).send().await.unwrap().json().await.unwrap();
+            list["jobs"].as_array().unwrap().len()
+        }
+    };
     loop {
-        let list: Value = c
-            .get(format!("{base}/v1/jobs?status=running"))
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
-        if !list["jobs"].as_array().unwrap().is_empty() {
+        let queued = count("queued").await;
+        if count("running").await >= 1 && queued >= 2 {
             break;
         }
         assert!(

@@ -931,3 +931,52 @@ async fn real_pipeline_unwraps_fixtures_end_to_end() {
     }
     s.stop().await.unwrap();
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn finished_jobs_expire_and_the_sweeper_deletes_them_with_their_files() {
+    let s = Server::start_with(
+        Arc::new(Fake {
+            steps: 1,
+            step: Duration::from_millis(1),
+        }),
+        |c| c.jobs.retention = Duration::ZERO,
+    )
+    .await;
+    let c = client();
+    let job = submit_ok(&c, &s, fixture("Box.glb"), "").await;
+    let id = job["id"].as_str().unwrap();
+    let blobs = s.data_dir().join("blobs/jobs").join(id);
+    assert!(
+        blobs.exists(),
+        "the input is stored before the job is accepted"
+    );
+    let url = s.url(&format!("/v1/jobs/{id}"));
+    let start = std::time::Instant::now();
+    loop {
+        let r = c.get(&url).send().await.unwrap();
+        if r.status().as_u16() == 404 {
+            break;
+        }
+        assert!(start.elapsed() < DEADLINE, "never swept");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    assert!(!blobs.exists(), "the sweeper deletes the job's files");
+    s.stop().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_triangle_limit_refuses_big_assets() {
+    let s = Server::start_with(
+        Arc::new(Fake {
+            steps: 1,
+            step: Duration::from_millis(1),
+        }),
+        |c| c.jobs.decode_limits.max_triangles = Some(10),
+    )
+    .await;
+    let c = client();
+    let r = submit_glb(&c, &s, fixture("Box.glb"), "").await;
+    assert_problem(r, 422, "limit_exceeded").await;
+    submit_ok(&c, &s, grid_glb(2), "").await;
+    s.stop().await.unwrap();
+}

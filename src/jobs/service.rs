@@ -222,6 +222,9 @@ pub struct JobService {
     pub(crate) work: Notify,
     /// Cancel flags of the jobs running in this process.
     pub(crate) running: Mutex<HashMap<String, Arc<AtomicBool>>>,
+    /// Submissions decoded at once: each holds its upload and decoded asset in memory (up to
+    /// the upload limit plus the decoder's limits), so this bounds the memory of submissions.
+    decode_permits: tokio::sync::Semaphore,
 }
 
 impl std::fmt::Debug for JobService {
@@ -271,6 +274,7 @@ impl JobService {
             changes: watch::channel(0).0,
             work: Notify::new(),
             running: Mutex::new(HashMap::new()),
+            decode_permits: tokio::sync::Semaphore::new(2),
         }))
     }
 
@@ -312,6 +316,9 @@ impl JobService {
                 detail,
             });
         }
+        let _permit = self.decode_permits.acquire().await.map_err(|_| {
+            SubmitError::Store(StoreError::Database("the service is stopping".into()))
+        })?;
         let this = self.clone();
         tokio::task::spawn_blocking(move || this.submit_blocking(owner, upload))
             .await
@@ -510,9 +517,10 @@ impl JobService {
             let (store, blobs) = (self.store.clone(), self.blobs.clone());
             let id = job.id.clone();
             blocking(move || {
-                // Row first: once it is gone nothing links to the blobs.
-                store.delete(&id)?;
-                blobs.delete_prefix(&job_prefix(&id)?)
+                // Blobs first: a crash in between leaves a terminal row (swept later), never
+                // files that no row names.
+                blobs.delete_prefix(&job_prefix(&id)?)?;
+                store.delete(&id).map(|_| ())
             })
             .await?;
             self.changed();

@@ -130,9 +130,10 @@ async fn sweep_retention(service: &Arc<JobService>) -> Result<(), StoreError> {
     let n = blocking(move || {
         let expired = store.expired(now_ms(), 100)?;
         for job in &expired {
-            // The row first: once it is gone nothing links to the blobs.
-            store.delete(&job.id)?;
+            // Blobs first: a crash in between leaves a row that the next sweep deletes,
+            // never files that no row names.
             blobs.delete_prefix(&job_prefix(&job.id)?)?;
+            store.delete(&job.id)?;
         }
         Ok(expired.len())
     })
