@@ -598,10 +598,12 @@ fn split_for(
     }
     let inside = |f: FaceId| label[f.index()] == id;
     let diameter = || {
-        let a = *super::flood(mesh, &faces[..1], &inside)
+        let a = *super::flood(mesh, &faces[..1], &inside, faces)
             .last()
             .unwrap_or(&faces[0]);
-        let b = *super::flood(mesh, &[a], &inside).last().unwrap_or(&a);
+        let b = *super::flood(mesh, &[a], &inside, faces)
+            .last()
+            .unwrap_or(&a);
         (a, b)
     };
     let (a, b, cause) = match defect {
