@@ -26,8 +26,10 @@
 //! Units: distances in model units (`_m`), angles in radians (`_rad`), counts of edges.
 //!
 //! Code map: [`options`] (every option, unit, default), [`features`] (§3.1, Algorithm 1),
-//! [`grow`] (§3.2, Algorithm 2), this file (the disk guarantee, the chart-count cap, the
-//! [`ChartMesh`] extraction for the parameterizer).
+//! [`grow`] (§3.2, Algorithm 2), [`validate`] (§3.3: flatten every chart, split the invalid
+//! ones, merge back; [`validate_charts_with_monitor`] reports progress and can be cancelled;
+//! every chart leaves it with a map, zero-area faces included), this file (the disk guarantee,
+//! the chart-count cap, the [`ChartMesh`] extraction for the parameterizer).
 //!
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.
