@@ -144,7 +144,9 @@ fn glb_of(parts: &[MeshInput]) -> Vec<u8> {
 }
 
 fn eval_dir() -> Option<PathBuf> {
-    std::env::var_os("TEXATLAS_EVAL_DIR").map(PathBuf::from)
+    std::env::var_os("TEXATLAS_EVAL_DIR")
+        .filter(|d| !d.is_empty())
+        .map(PathBuf::from)
 }
 
 /// One comparison: our value, the evaluator's (by JSON pointer).
