@@ -35,7 +35,7 @@
 //! O(positions × lines), positions ≤ W + chart width; the inner loop visits the chart's lines
 //! most-protruding first and stops as soon as the waste cannot beat the best so far, which in
 //! practice visits a few lines per position.
-use super::place::{Extents, Orientation, EMPTY};
+use super::place::{Orientation, EMPTY};
 
 /// A chosen position: orientation index and the canvas position of the orientation's grid
 /// origin (top-left of `D`).
@@ -117,11 +117,11 @@ impl HorizonPage {
             });
         };
         let widen = i64::from(y1 - y0) * i64::from(bw) > i64::from(x1 - x0) * i64::from(bh);
-        let pairs = if widen {
-            [[Side::PlusX, Side::MinusX], [Side::PlusY, Side::MinusY]]
+        let pairs: [Vec<Side>; 1] = [if widen {
+            vec![Side::PlusX, Side::MinusX, Side::PlusY, Side::MinusY]
         } else {
-            [[Side::PlusY, Side::MinusY], [Side::PlusX, Side::MinusX]]
-        };
+            vec![Side::PlusY, Side::MinusY, Side::PlusX, Side::MinusX]
+        }];
         for pair in pairs {
             let mut best: Best = None;
             for side in pair {

@@ -104,6 +104,9 @@ pub struct Packing {
     pub num_pages: u32,
     /// The density used, texels per model unit.
     pub texels_per_unit: f64,
+    /// Packings run to find the density (1 with [`TexelDensity::TexelsPerUnit`]); a cost
+    /// diagnostic for reports and benchmarks.
+    pub trials: u32,
 }
 
 /// Errors of [`pack_charts`]; each says what to change.
@@ -208,6 +211,7 @@ pub fn pack_charts(
         prepared: &prepared,
         order: &order,
         options,
+        trials: std::cell::Cell::new(0),
     };
     let trial = match options.density {
         TexelDensity::TexelsPerUnit(d) => {
@@ -306,6 +310,8 @@ struct Context<'c, 'a> {
     prepared: &'c [place::PreparedChart],
     order: &'c [usize],
     options: &'c PackOptions,
+    /// Packings run so far.
+    trials: std::cell::Cell<u32>,
 }
 
 /// Where one chart went in a trial.
@@ -347,6 +353,7 @@ impl Context<'_, '_> {
     ) -> Result<Trial, PackError> {
         let o = self.options;
         let [w, h] = self.page();
+        self.trials.set(self.trials.get() + 1);
         let mut trial = Trial {
             texels_per_unit,
             placed: vec![None; self.charts.len()],
@@ -477,6 +484,7 @@ impl Context<'_, '_> {
             charts,
             num_pages: trial.pages.len() as u32,
             texels_per_unit: trial.texels_per_unit,
+            trials: self.trials.get(),
         }
     }
 }
