@@ -362,16 +362,32 @@ impl Context<'_, '_> {
             unplaced: 0,
             worst_size_ratio: 0.0,
         };
-        for &i in self.order {
+        // Footprints are made in parallel, a batch of charts at a time (a failing trial stops
+        // early, so not all up front); each chart's are independent of the others: the same
+        // result whatever the thread count.
+        const BATCH: usize = 16;
+        let mut batch: Vec<Vec<place::Orientation>> = Vec::new();
+        for (n, &i) in self.order.iter().enumerate() {
             progress.step()?;
-            let orients = place::orientations(
-                &self.charts[i],
-                &self.prepared[i],
-                texels_per_unit,
-                o.rotations,
-                o.padding_texels,
-                [w, h],
-            );
+            if n % BATCH == 0 {
+                use rayon::prelude::*;
+                let end = (n + BATCH).min(self.order.len());
+                batch = self.order[n..end]
+                    .par_iter()
+                    .map(|&j| {
+                        place::orientations(
+                            &self.charts[j],
+                            &self.prepared[j],
+                            texels_per_unit,
+                            o.rotations,
+                            o.padding_texels,
+                            [w, h],
+                        )
+                    })
+                    .collect();
+                batch.reverse();
+            }
+            let orients = batch.pop().unwrap_or_default();
             let ratio = orients
                 .iter()
                 .map(|o| {
@@ -516,7 +532,7 @@ fn fit_to_page(
         page_texels: [w, h],
         padding_texels: ctx.options.padding_texels,
     };
-    if !(total_area > 0.0) {
+    if total_area.is_nan() || total_area <= 0.0 {
         // Only degenerate charts: one texel each, any density.
         let t = ctx.run(1.0, false, &mut progress)?;
         progress.finish()?;
