@@ -11,7 +11,7 @@
 //!                                                              │ TriangleMesh::build (weld, validate, repair)
 //!                                                              ▼
 //!                                                        mesh::TriangleMesh
-//!                                                              │ atlas (segment → parameterize → pack → measure)
+//!                                                              │ atlas::generate (segment → parameterize → pack → measure)
 //!                                                              ▼
 //!  bytes ◀──gltf_io::encode── Asset + per-corner UVs ◀──────── atlas
 //! ```
@@ -22,9 +22,14 @@
 //!   defects and the repair policy. Depends on nothing else in the crate.
 //! - [`numerics`]: sparse assembly, preconditioned CG, sparse Cholesky (faer, behind one module).
 //!   Knows nothing of meshes.
-//! - [`atlas`]: the pipeline. Today: segmentation into disk-shaped charts with validation
-//!   (LSCM paper §3) and chart parameterization (LSCM, progressive mesh, HLSCM). Packing, the
-//!   report and `atlas::generate` come next.
+//! - [`atlas`]: the pipeline, joined to the rest by one call, [`atlas::generate`]: segmentation
+//!   into disk-shaped charts with validation (LSCM paper §3), chart parameterization (LSCM,
+//!   progressive mesh, HLSCM), packing (horizon packer, LSCM paper §4 / Iso-charts §6) and the
+//!   quality report (`atlas::measure`, the independent evaluator's definitions). Progress and
+//!   cancellation go through [`atlas::Progress`].
+//! - [`unwrap`]: one unwrap of one decoded asset (mesh build → `atlas::generate` → encode →
+//!   report), timed; shared by the CLI and the job workers. Not core (wall-clock time).
+//! - [`preview`]: the `--preview` PNG of a page's UV layout.
 //! - [`gltf_io`]: the only module that knows glTF: decode (with JSON paths for every defect) and
 //!   encode (split vertices at UV seams, carry everything else through).
 //! - [`bench`](mod@bench): `texatlas bench` measurements (not core: uses time, processes, files).
@@ -35,8 +40,8 @@
 //!   pipeline on the blocking pool, progress, cancel, panics, time limits), the sweeper, metrics.
 //! - [`http`]: the only module that knows axum: the `/v1` API, problem+json errors, auth.
 //! - [`service`]: the composition root of `texatlas serve`.
-//! - [`api`]: the only serde wire types, each mirroring a document in `proto/`, with explicit
-//!   `From` conversions from the domain types.
+//! - [`api`]: the only serde wire types, each mirroring a document in `proto/` (inspect, options,
+//!   report, openapi), with explicit conversions from and to the domain types.
 //!
 //! ## Architecture invariants
 //!

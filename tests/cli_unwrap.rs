@@ -2,6 +2,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+mod gltf_common;
 mod proto_common;
 
 use proto_common::violations;
@@ -110,7 +111,7 @@ fn bad_options_and_files_fail_with_a_clear_message() {
         (vec!["--rotations", "0"], "rotations"),
         (vec!["--resolution", "big"], "not a resolution"),
         (vec!["--solver", "magic"], "not a solver"),
-        (vec!["--texels-per-unit", "-3"], "texels_per_unit"),
+        (vec!["--texels-per-unit=-3"], "texels_per_unit"),
     ] {
         let box_glb = fixture("Box.glb");
         let mut all: Vec<String> = ["unwrap", s(&box_glb), "-o", s(&out)]
@@ -130,6 +131,70 @@ fn bad_options_and_files_fail_with_a_clear_message() {
     std::fs::write(&garbage, b"glTF\x02\x00\x00\x00junk").expect("write");
     let o = texatlas(&["unwrap", s(&garbage), "-o", s(&out)]);
     assert!(!o.status.success());
-    assert!(stderr(&o).contains("decoding"), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("garbage.glb") && e.contains("GLB header"), "{e}");
     assert!(!out.exists(), "no output on failure");
+}
+
+/// A GLB of a generated torus (several charts, enough work for rayon to split).
+fn torus_glb() -> Vec<u8> {
+    let input = texatlas::mesh::fixtures::torus(48, 24, 2.0, 0.6);
+    let mut b = gltf_common::Builder::new();
+    let positions: Vec<[f32; 3]> = input
+        .positions_m
+        .iter()
+        .map(|p| p.map(|x| x as f32))
+        .collect();
+    let pos = b.floats(&positions);
+    let idx: Vec<u32> = input.triangles.iter().flatten().copied().collect();
+    let ind = b.indices(&idx);
+    b.push(
+        "meshes",
+        serde_json::json!({"primitives": [{"attributes": {"POSITION": pos}, "indices": ind}]}),
+    );
+    b.push("nodes", serde_json::json!({"mesh": 0}));
+    b.glb()
+}
+
+#[test]
+fn output_and_report_are_identical_whatever_the_thread_count() {
+    let input = tmp("torus.glb");
+    std::fs::write(&input, torus_glb()).expect("write");
+    let mut outputs = Vec::new();
+    for threads in ["1", "2", "3"] {
+        let out = tmp(&format!("torus-{threads}.glb"));
+        let report = tmp(&format!("torus-{threads}.json"));
+        let o = Command::new(env!("CARGO_BIN_EXE_texatlas"))
+            .env("RAYON_NUM_THREADS", threads)
+            .args([
+                "unwrap",
+                "-q",
+                s(&input),
+                "-o",
+                s(&out),
+                "--report",
+                s(&report),
+            ])
+            .output()
+            .expect("run texatlas");
+        assert!(o.status.success(), "{threads} threads: {}", stderr(&o));
+        let mut json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&report).expect("report")).expect("JSON");
+        json.as_object_mut().expect("object").remove("timings_s");
+        outputs.push((std::fs::read(&out).expect("output"), json));
+    }
+    assert!(
+        outputs[0].1["pipeline"]["charts"].as_u64().unwrap_or(0) > 1,
+        "several charts"
+    );
+    for (i, o) in outputs.iter().enumerate().skip(1) {
+        assert!(
+            o.0 == outputs[0].0,
+            "GLB with thread count #{i} differs from 1 thread"
+        );
+        assert_eq!(
+            o.1, outputs[0].1,
+            "report with thread count #{i} differs from 1 thread"
+        );
+    }
 }

@@ -144,7 +144,9 @@ fn glb_of(parts: &[MeshInput]) -> Vec<u8> {
 }
 
 fn eval_dir() -> Option<PathBuf> {
-    std::env::var_os("TEXATLAS_EVAL_DIR").map(PathBuf::from)
+    std::env::var_os("TEXATLAS_EVAL_DIR")
+        .filter(|d| !d.is_empty())
+        .map(PathBuf::from)
 }
 
 /// One comparison: our value, the evaluator's (by JSON pointer).
@@ -416,8 +418,9 @@ fn check_asset(
 
 const HEADER: &str = "file                               triangles charts        l2      linf    pack  flips s.pairs  x.pairs  meas_ms";
 
-fn run_all(assets: Vec<(String, Vec<u8>, u32, bool)>, evaluator: &Path) {
-    let dir = std::env::temp_dir().join(format!("texatlas-measure-{}", std::process::id()));
+/// `tag` names this run's temp dir: the tests run in parallel in one process.
+fn run_all(tag: &str, assets: Vec<(String, Vec<u8>, u32, bool)>, evaluator: &Path) {
+    let dir = std::env::temp_dir().join(format!("texatlas-measure-{}-{tag}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     println!("{HEADER}");
     let mut failures = Vec::new();
@@ -487,7 +490,7 @@ fn measure_agrees_with_the_evaluator_on_fixtures_and_generated_meshes() {
     for (name, parts) in generated {
         assets.push((format!("{name}.glb"), glb_of(&parts), 256, false));
     }
-    run_all(assets, &evaluator);
+    run_all("fixtures", assets, &evaluator);
 }
 
 #[test]
@@ -522,7 +525,7 @@ fn measure_agrees_with_the_evaluator_on_the_corpus() {
             Some((name, bytes, 1024, huge))
         })
         .collect();
-    run_all(assets, &evaluator);
+    run_all("corpus", assets, &evaluator);
 }
 
 /// UVs of a well-formed atlas for timing: every face in its own square cell (no overlap, every

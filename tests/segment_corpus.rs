@@ -8,7 +8,8 @@
 //! the packer does). The 1M-triangle mesh is left out unless `TEXATLAS_CORPUS_ALL` is set (it
 //! takes minutes in a debug build).
 //!
-//! Run by hand: `TEXATLAS_CORPUS_DIR=../shared/corpus cargo test --test segment_corpus -- --nocapture`.
+//! Run by hand: `TEXATLAS_CORPUS_DIR=../shared/corpus cargo test --test segment_corpus -- --nocapture`
+//! (add `TEXATLAS_CORPUS_ONLY=bunny,armadillo` to run only the files whose names contain a word).
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -29,6 +30,13 @@ fn segment_every_corpus_mesh() {
     let mut files: Vec<PathBuf> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|x| x == "glb"))
+        .filter(|p| {
+            // TEXATLAS_CORPUS_ONLY=bunny,spot runs only the files whose names contain one of
+            // the comma-separated words (for measuring by hand).
+            std::env::var("TEXATLAS_CORPUS_ONLY").map_or(true, |only| {
+                only.split(',').any(|w| p.to_string_lossy().contains(w))
+            })
+        })
         .filter(|p| {
             // The 1M-face mesh takes minutes in a debug build; opt in with TEXATLAS_CORPUS_ALL.
             std::env::var_os("TEXATLAS_CORPUS_ALL").is_some() || !p.to_string_lossy().contains("1M")

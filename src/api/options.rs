@@ -91,10 +91,22 @@ pub struct OptionsJson {
     /// Upper bound on the number of charts after segmentation (best effort); unset: no bound.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_charts: Option<usize>,
-    /// Largest per-chart ratio between face area ratios (model / UV), default 2 (LSCM paper
-    /// §3.3). Must be ≥ 1.
+    /// Largest Sander L2 stretch of a chart before validation splits it, ≥ 1. Absent: 1.1;
+    /// `null`: no stretch bound.
+    #[serde(
+        default,
+        deserialize_with = "explicit_null",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub max_stretch: Option<Option<f64>>,
+    /// The LSCM paper's area test (§3.3): largest per-chart ratio between face area ratios
+    /// (model / UV), ≥ 1, e.g. 2. Absent: no area test.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_area_ratio: Option<f64>,
+    /// Passes of merging valid charts back into a neighbour after validation; 0 disables
+    /// merging. Default 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub merge_passes: Option<usize>,
     /// Fraction of edges kept as feature candidates, (0, 1], default 0.05.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub feature_fraction: Option<f64>,
@@ -107,6 +119,16 @@ pub struct OptionsJson {
     /// Container of the result, default `glb`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub output_format: Option<OutputFormatJson>,
+}
+
+/// `Some(v)` for any present value, `null` included, so that an absent field (`None`, via
+/// `#[serde(default)]`) and an explicit `null` (`Some(None)`) differ.
+fn explicit_null<'de, D, T>(d: D) -> Result<Option<Option<T>>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    Option::<T>::deserialize(d).map(Some)
 }
 
 /// The domain options an [`OptionsJson`] stands for.
@@ -139,8 +161,14 @@ impl OptionsJson {
             atlas.pack.rotations = r;
         }
         atlas.segment.max_charts = self.max_charts;
+        if let Some(r) = self.max_stretch {
+            atlas.validate.max_stretch = r;
+        }
         if let Some(r) = self.max_area_ratio {
             atlas.validate.max_area_ratio = Some(r);
+        }
+        if let Some(n) = self.merge_passes {
+            atlas.validate.merge_passes = n;
         }
         if let Some(f) = self.feature_fraction {
             atlas.segment.lscm.feature_fraction = f;
@@ -182,7 +210,9 @@ impl OptionsJson {
             },
             rotations: Some(a.pack.rotations),
             max_charts: a.segment.max_charts,
+            max_stretch: Some(a.validate.max_stretch),
             max_area_ratio: a.validate.max_area_ratio,
+            merge_passes: Some(a.validate.merge_passes),
             feature_fraction: Some(a.segment.lscm.feature_fraction),
             solver: Some(match a.validate.parameterize.method {
                 ParameterizeMethod::Direct => SolverJson::Direct,
@@ -217,7 +247,7 @@ mod tests {
     #[test]
     fn every_field_maps_and_round_trips() {
         let text = r#"{"resolution":[2048,512],"padding_texels":4,"texels_per_unit":300.5,
-            "rotations":4,"max_charts":12,"max_area_ratio":3.0,"feature_fraction":0.1,
+            "rotations":4,"max_charts":12,"max_stretch":1.2,"max_area_ratio":3.0,"merge_passes":2,"feature_fraction":0.1,
             "solver":"hierarchical","uv_set":2,"output_format":"gltf"}"#;
         let o: OptionsJson = serde_json::from_str(text).unwrap();
         let s = o.to_settings().unwrap();
@@ -230,6 +260,8 @@ mod tests {
         assert_eq!(s.atlas.pack.rotations, 4);
         assert_eq!(s.atlas.segment.max_charts, Some(12));
         assert_eq!(s.atlas.validate.max_area_ratio, Some(3.0));
+        assert_eq!(s.atlas.validate.max_stretch, Some(1.2));
+        assert_eq!(s.atlas.validate.merge_passes, 2);
         assert_eq!(s.atlas.segment.lscm.feature_fraction, 0.1);
         assert_eq!(
             s.atlas.validate.parameterize.method,
@@ -241,6 +273,21 @@ mod tests {
     }
 
     #[test]
+    fn null_max_stretch_removes_the_bound_and_absent_keeps_the_default() {
+        let absent: OptionsJson = serde_json::from_str("{}").unwrap();
+        assert_eq!(
+            absent.to_settings().unwrap().atlas.validate.max_stretch,
+            Some(1.1)
+        );
+        let null: OptionsJson = serde_json::from_str(r#"{"max_stretch":null}"#).unwrap();
+        assert_eq!(null.max_stretch, Some(None));
+        let s = null.to_settings().unwrap();
+        assert_eq!(s.atlas.validate.max_stretch, None);
+        let back = serde_json::to_string(&OptionsJson::effective(&s)).unwrap();
+        assert!(back.contains(r#""max_stretch":null"#), "{back}");
+    }
+
+    #[test]
     fn bad_values_name_the_option() {
         for (text, option) in [
             (r#"{"padding_texels":600}"#, "padding_texels"),
@@ -248,6 +295,7 @@ mod tests {
             (r#"{"rotations":0}"#, "rotations"),
             (r#"{"texels_per_unit":-1}"#, "texels_per_unit"),
             (r#"{"max_area_ratio":0.5}"#, "max_area_ratio"),
+            (r#"{"max_stretch":0.9}"#, "max_stretch"),
             (r#"{"feature_fraction":2}"#, "lscm.feature_fraction"),
             (r#"{"max_charts":0}"#, "max_charts"),
         ] {

@@ -89,12 +89,12 @@ pub struct PipelineJson {
     pub splits_flipped: usize,
     /// Validation splits for UV boundary overlaps.
     pub splits_overlap: usize,
-    /// Validation splits for area distortion.
+    /// Validation splits for area distortion or stretch above the bound.
     pub splits_area_ratio: usize,
     /// Small charts merged back after splitting.
     pub merges: usize,
-    /// Charts kept above the area-ratio threshold (could not be split further).
-    pub area_ratio_unresolved: usize,
+    /// Charts kept above the stretch or area-ratio bound (could not be split further).
+    pub bound_unresolved: usize,
     /// Charts flattened by the direct LSCM solve.
     pub charts_direct: usize,
     /// Charts flattened by HLSCM.
@@ -181,7 +181,7 @@ impl ReportJson {
                 splits_overlap: s.validation_splits[1],
                 splits_area_ratio: s.validation_splits[2],
                 merges: s.validation_merges,
-                area_ratio_unresolved: s.area_ratio_unresolved,
+                bound_unresolved: s.bound_unresolved,
                 charts_direct: s.charts_direct,
                 charts_hierarchical: s.charts_hierarchical,
                 texels_per_unit: s.texels_per_unit,

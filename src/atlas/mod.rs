@@ -100,8 +100,9 @@ pub struct PipelineStats {
     pub validation_splits: [usize; 3],
     /// Small charts merged back by validation.
     pub validation_merges: usize,
-    /// Charts kept although their area ratio is above the threshold (could not be split).
-    pub area_ratio_unresolved: usize,
+    /// Charts kept although their stretch or area ratio is above the bound (could not be split
+    /// further).
+    pub bound_unresolved: usize,
     /// Charts flattened by the direct solve and by HLSCM.
     pub charts_direct: usize,
     /// See `charts_direct`.
@@ -193,7 +194,9 @@ pub fn generate(
     };
     for (chart, defect) in &validated.unresolved {
         match defect {
-            ChartDefect::AreaRatio { .. } => stats.area_ratio_unresolved += 1,
+            ChartDefect::AreaRatio { .. } | ChartDefect::Stretch { .. } => {
+                stats.bound_unresolved += 1
+            }
             ChartDefect::Unparameterizable(e) => {
                 return Err(AtlasError::Unparameterizable {
                     chart: *chart,
@@ -357,7 +360,7 @@ fn place_degenerate(
             }
         }
     }
-    known.sort_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)));
+    known.sort_by_key(|a| (a.0, a.1));
     known.dedup_by(|a, b| (a.0, a.1) == (b.0, b.1));
     // The lowest chart at `k`, or the entry of chart `c` at `k`.
     let first_at = |k: &Key| {

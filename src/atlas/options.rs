@@ -16,7 +16,8 @@ pub struct AtlasOptions {
     /// Chart segmentation (LSCM paper §3.1–3.2): feature fraction, string lengths, merge ε,
     /// optional chart cap.
     pub segment: SegmentOptions,
-    /// Chart validation (§3.3) and the parameterizer it runs: area-ratio threshold, solver.
+    /// Chart validation (§3.3) and the parameterizer it runs: stretch bound, area-ratio test,
+    /// merge passes, solver.
     pub validate: ValidateOptions,
     /// Packing: page resolution, padding, texel density, rotations.
     pub pack: PackOptions,
@@ -29,14 +30,7 @@ impl AtlasOptions {
     /// Rejects meaningless values (module doc). Called by [`super::generate`].
     pub fn check(&self) -> Result<(), AtlasError> {
         self.segment.check().map_err(AtlasError::from)?;
-        if let Some(r) = self.validate.max_area_ratio {
-            if !(r >= 1.0 && r.is_finite()) {
-                return Err(invalid(
-                    "max_area_ratio",
-                    format!("{r} is not a finite ratio >= 1; use e.g. 2.0, or leave it unset"),
-                ));
-            }
-        }
+        self.validate.check().map_err(AtlasError::from)?;
         let p = &self.pack;
         for (name, side) in [
             ("width_texels", p.width_texels),

@@ -60,9 +60,17 @@ pub struct OptionFlags {
     /// Upper bound on the number of charts after segmentation (best effort). Default: none.
     #[arg(long)]
     pub max_charts: Option<usize>,
-    /// Largest per-chart spread of face area ratios before a chart is split (>= 1). Default 2.
+    /// Largest Sander L2 stretch of a chart before validation splits it (>= 1), or `none` for
+    /// no bound. Default 1.1.
+    #[arg(long, value_parser = parse_max_stretch)]
+    pub max_stretch: Option<Option<f64>>,
+    /// The LSCM paper's area test: largest per-chart spread of face area ratios before a chart
+    /// is split (>= 1, the paper uses 2). Default: off.
     #[arg(long)]
     pub max_area_ratio: Option<f64>,
+    /// Passes of merging valid charts back into a neighbour (0 disables). Default 1.
+    #[arg(long)]
+    pub merge_passes: Option<usize>,
     /// Fraction of edges kept as feature candidates, (0, 1]. Default 0.05.
     #[arg(long)]
     pub feature_fraction: Option<f64>,
@@ -87,7 +95,9 @@ impl OptionFlags {
             texels_per_unit: self.texels_per_unit,
             rotations: self.rotations,
             max_charts: self.max_charts,
+            max_stretch: self.max_stretch,
             max_area_ratio: self.max_area_ratio,
+            merge_passes: self.merge_passes,
             feature_fraction: self.feature_fraction,
             solver: self.solver,
             uv_set: self.uv_set,
@@ -106,6 +116,15 @@ fn parse_resolution(s: &str) -> Result<ResolutionJson, String> {
         Some((w, h)) => Ok(ResolutionJson::Rect([num(w)?, num(h)?])),
         None => Ok(ResolutionJson::Square(num(s)?)),
     }
+}
+
+fn parse_max_stretch(s: &str) -> Result<Option<f64>, String> {
+    if s == "none" {
+        return Ok(None);
+    }
+    s.parse::<f64>()
+        .map(Some)
+        .map_err(|_| format!("`{s}` is not a stretch bound; use e.g. 1.1, or none"))
 }
 
 fn parse_solver(s: &str) -> Result<SolverJson, String> {

@@ -18,10 +18,12 @@
 //! `Σ_c (y + Dmin[c] - wall[x + c])`, the area between the chart's bottom horizon and the
 //! current horizon (lscm-2002 Fig. 7). Every `x` keeping the bounding box within `W × H` is
 //! tried, for every orientation; the least waste wins (ties: first orientation, then smallest
-//! `x`: deterministic). The direction pair follows isocharts-2004 §6: with the current box
-//! `W_curr × H_curr`, if `H_curr · W / H > W_curr` the chart comes from the left or right,
-//! otherwise from the top or bottom; the pair's other member competes on waste. If the pair has
-//! no feasible position, the other pair is tried.
+//! `x`: deterministic). Directions: isocharts-2004 §6 picks a pair from the aspect ratio
+//! (with the current box `W_curr × H_curr`, left/right if `H_curr · W / H > W_curr`, else
+//! top/bottom) and lets its two members compete on waste. Here all four sides compete and the
+//! aspect rule only orders them (which decides ties): measured on the bunny (75 charts, 1024²,
+//! padding 2, 16 rotations) this raised the efficiency from 0.624 to 0.650 for twice the search.
+//! The page bound keeps the box within `W × H` either way.
 //!
 //! Invariant (the no-overlap guarantee, exact on the texel grid): a chart's padded footprint
 //! `D` never meets the footprint `F` of a chart already placed, because in each line it covers
@@ -31,11 +33,12 @@
 //!
 //! Units: texels (`i32` canvas coordinates, `i64` waste in texels²).
 //!
-//! Cost per chart: O(canvas) to build the walls, then per orientation and direction
-//! O(positions × lines), positions ≤ W + chart width; the inner loop visits the chart's lines
-//! most-protruding first and stops as soon as the waste cannot beat the best so far, which in
-//! practice visits a few lines per position.
-use super::place::{Extents, Orientation, EMPTY};
+//! Cost per chart: O(canvas) to build the four walls, then per orientation and side
+//! O(positions × lines) at worst, positions ≤ box extent + chart extent ≤ 2·W. In practice a
+//! vectorized lower bound from the 4 most protruding lines rejects most positions with one
+//! comparison, and the rest stop as soon as the waste cannot beat the best so far. The four
+//! sides run in parallel (rayon) above [`PARALLEL_WORK`], deterministically.
+use super::place::{Orientation, EMPTY};
 
 /// A chosen position: orientation index and the canvas position of the orientation's grid
 /// origin (top-left of `D`).
@@ -73,6 +76,9 @@ enum Side {
     /// From smaller x.
     MinusX,
 }
+
+/// Search work (lines × positions, roughly) above which the four sides run in parallel.
+const PARALLEL_WORK: i64 = 200_000;
 
 /// Best candidate so far: waste, then placement.
 type Best = Option<(i64, Placement)>;
@@ -117,34 +123,60 @@ impl HorizonPage {
             });
         };
         let widen = i64::from(y1 - y0) * i64::from(bw) > i64::from(x1 - x0) * i64::from(bh);
-        let pairs = if widen {
-            [[Side::PlusX, Side::MinusX], [Side::PlusY, Side::MinusY]]
+        // All four sides compete on waste (measured: bunny 0.624 → 0.650 against the pair of
+        // isocharts-2004 alone); the aspect rule orders them, which decides ties.
+        let sides = if widen {
+            [Side::PlusX, Side::MinusX, Side::PlusY, Side::MinusY]
         } else {
-            [[Side::PlusY, Side::MinusY], [Side::PlusX, Side::MinusX]]
+            [Side::PlusY, Side::MinusY, Side::PlusX, Side::MinusX]
         };
-        for pair in pairs {
-            let mut best: Best = None;
-            for side in pair {
-                let wall = self.wall(side);
-                let prefix = prefix_sums(&wall);
-                for (k, o) in orientations.iter().enumerate() {
-                    // An orientation whose padded footprint repeats an earlier one's (small or
-                    // symmetric charts) cannot do better: skip it.
-                    let repeated = orientations[..k].iter().any(|e| {
+        // An orientation whose padded footprint repeats an earlier one's (small or symmetric
+        // charts) cannot do better: skip it.
+        let usable: Vec<bool> = (0..orientations.len())
+            .map(|k| {
+                let o = &orientations[k];
+                fits(o)
+                    && !orientations[..k].iter().any(|e| {
                         e.width_texels == o.width_texels
                             && e.height_texels == o.height_texels
                             && e.dilated == o.dilated
-                    });
-                    if fits(o) && !repeated {
-                        self.search(side, &wall, &prefix, k, o, &mut best);
-                    }
+                    })
+            })
+            .collect();
+        let per_side = |side: Side| -> Best {
+            let wall = self.wall(side);
+            let prefix = prefix_sums(&wall);
+            let mut best: Best = None;
+            for (k, o) in orientations.iter().enumerate() {
+                if usable[k] {
+                    self.search(side, &wall, &prefix, k, o, &mut best);
                 }
             }
-            if let Some((_, p)) = best {
-                return Some(p);
+            best
+        };
+        // Sides in parallel when there is enough work; each side's best is deterministic and
+        // the reduction below takes the least waste, ties to the earlier side: the same result
+        // as the sequential loop whatever the thread count.
+        let work: i64 = orientations
+            .iter()
+            .zip(&usable)
+            .filter(|(_, &u)| u)
+            .map(|(o, _)| o.width_texels + o.height_texels)
+            .sum::<i64>()
+            * i64::from(bw + bh);
+        let results: Vec<Best> = if work > PARALLEL_WORK {
+            use rayon::prelude::*;
+            sides.par_iter().map(|&s| per_side(s)).collect()
+        } else {
+            sides.iter().map(|&s| per_side(s)).collect()
+        };
+        let mut best: Best = None;
+        for r in results.into_iter().flatten() {
+            if best.is_none_or(|b| r.0 < b.0) {
+                best = Some(r);
             }
         }
-        None
+        best.map(|(_, p)| p)
     }
 
     /// Records a chart at `placement` (its footprint `F` updates the horizons; its `D` the box).

@@ -104,6 +104,9 @@ pub struct Packing {
     pub num_pages: u32,
     /// The density used, texels per model unit.
     pub texels_per_unit: f64,
+    /// Packings run to find the density (1 with [`TexelDensity::TexelsPerUnit`]); a cost
+    /// diagnostic for reports and benchmarks.
+    pub trials: u32,
 }
 
 /// Errors of [`pack_charts`]; each says what to change.
@@ -208,6 +211,7 @@ pub fn pack_charts(
         prepared: &prepared,
         order: &order,
         options,
+        trials: std::cell::Cell::new(0),
     };
     let trial = match options.density {
         TexelDensity::TexelsPerUnit(d) => {
@@ -306,6 +310,8 @@ struct Context<'c, 'a> {
     prepared: &'c [place::PreparedChart],
     order: &'c [usize],
     options: &'c PackOptions,
+    /// Packings run so far.
+    trials: std::cell::Cell<u32>,
 }
 
 /// Where one chart went in a trial.
@@ -347,6 +353,7 @@ impl Context<'_, '_> {
     ) -> Result<Trial, PackError> {
         let o = self.options;
         let [w, h] = self.page();
+        self.trials.set(self.trials.get() + 1);
         let mut trial = Trial {
             texels_per_unit,
             placed: vec![None; self.charts.len()],
@@ -355,16 +362,32 @@ impl Context<'_, '_> {
             unplaced: 0,
             worst_size_ratio: 0.0,
         };
-        for &i in self.order {
+        // Footprints are made in parallel, a batch of charts at a time (a failing trial stops
+        // early, so not all up front); each chart's are independent of the others: the same
+        // result whatever the thread count.
+        const BATCH: usize = 16;
+        let mut batch: Vec<Vec<place::Orientation>> = Vec::new();
+        for (n, &i) in self.order.iter().enumerate() {
             progress.step()?;
-            let orients = place::orientations(
-                &self.charts[i],
-                &self.prepared[i],
-                texels_per_unit,
-                o.rotations,
-                o.padding_texels,
-                [w, h],
-            );
+            if n % BATCH == 0 {
+                use rayon::prelude::*;
+                let end = (n + BATCH).min(self.order.len());
+                batch = self.order[n..end]
+                    .par_iter()
+                    .map(|&j| {
+                        place::orientations(
+                            &self.charts[j],
+                            &self.prepared[j],
+                            texels_per_unit,
+                            o.rotations,
+                            o.padding_texels,
+                            [w, h],
+                        )
+                    })
+                    .collect();
+                batch.reverse();
+            }
+            let orients = batch.pop().unwrap_or_default();
             let ratio = orients
                 .iter()
                 .map(|o| {
@@ -477,6 +500,7 @@ impl Context<'_, '_> {
             charts,
             num_pages: trial.pages.len() as u32,
             texels_per_unit: trial.texels_per_unit,
+            trials: self.trials.get(),
         }
     }
 }
@@ -508,7 +532,7 @@ fn fit_to_page(
         page_texels: [w, h],
         padding_texels: ctx.options.padding_texels,
     };
-    if !(total_area > 0.0) {
+    if total_area.is_nan() || total_area <= 0.0 {
         // Only degenerate charts: one texel each, any density.
         let t = ctx.run(1.0, false, &mut progress)?;
         progress.finish()?;

@@ -244,72 +244,104 @@ impl Mask {
 /// Marks in `mask` every texel that a triangle touches (closed texel squares, module doc).
 /// Triangles are given by their corners in the mask's texel units.
 ///
+/// Per triangle, the x-range of its intersection with each texel line `y = L` is computed once
+/// (two edge crossings), and row `j`'s range is the hull of lines `j` and `j + 1` and of the
+/// corners inside the slab: the exact x-range of the triangle clipped to the slab.
+///
 /// Cost: O(rows spanned) per triangle plus the spans written.
 pub fn rasterize_conservative(mask: &mut Mask, triangles: impl IntoIterator<Item = [[f64; 2]; 3]>) {
-    let (w, h) = (mask.width() as f64, mask.height() as f64);
     if mask.width() == 0 || mask.height() == 0 {
         return;
     }
-    for tri in triangles {
-        if tri.iter().any(|p| !(p[0].is_finite() && p[1].is_finite())) {
+    let (w, h) = (i64::from(mask.width()), i64::from(mask.height()));
+    const E: f64 = TOUCH_EPS_TEXELS;
+    for mut t in triangles {
+        if t.iter().any(|p| {
+            !(p[0].is_finite() && p[1].is_finite() && p[0].abs() < 1e15 && p[1].abs() < 1e15)
+        }) {
             continue;
         }
-        let ymin = tri.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min) - TOUCH_EPS_TEXELS;
-        let ymax = tri.iter().map(|p| p[1]).fold(f64::NEG_INFINITY, f64::max) + TOUCH_EPS_TEXELS;
-        // Rows whose closed slab [j, j+1] meets [ymin, ymax]: ceil(ymin) - 1 ..= floor(ymax).
-        let j0 = (ymin.ceil() - 1.0).max(0.0);
-        let j1 = ymax.floor().min(h - 1.0);
+        // Sort corners by y: a (lowest), b, c (highest).
+        if t[1][1] < t[0][1] {
+            t.swap(0, 1);
+        }
+        if t[2][1] < t[1][1] {
+            t.swap(1, 2);
+        }
+        if t[1][1] < t[0][1] {
+            t.swap(0, 1);
+        }
+        let [a, b, c] = t;
+        // Rows whose closed slab [j, j+1] meets [a.y - E, c.y + E]: ceil(lo) - 1 ..= floor(hi).
+        let j0 = (ceil_i(a[1] - E) - 1).max(0);
+        let j1 = floor_i(c[1] + E).min(h - 1);
         if j0 > j1 {
             continue;
         }
-        let (j0, j1) = (j0 as u32, j1 as u32);
-        for j in j0..=j1 {
-            let (lo, hi) = (
-                j as f64 - TOUCH_EPS_TEXELS,
-                j as f64 + 1.0 + TOUCH_EPS_TEXELS,
-            );
-            let Some((xa, xb)) = slab_x_range(&tri, lo, hi) else {
-                continue;
+        let on = |p: [f64; 2], q: [f64; 2], y: f64| {
+            let s = ((y - p[1]) / (q[1] - p[1])).clamp(0.0, 1.0);
+            p[0] + s * (q[0] - p[0])
+        };
+        // The triangle's x-range on the line y = l, if it meets it.
+        let line = |l: f64| -> Option<(f64, f64)> {
+            if l < a[1] || l > c[1] {
+                return None;
+            }
+            let x1 = if c[1] > a[1] { on(a, c, l) } else { a[0] };
+            let x2 = if l <= b[1] {
+                if b[1] > a[1] {
+                    on(a, b, l)
+                } else {
+                    b[0]
+                }
+            } else {
+                on(b, c, l)
             };
-            let xa = xa - TOUCH_EPS_TEXELS;
-            let xb = xb + TOUCH_EPS_TEXELS;
-            // Columns whose closed interval [i, i+1] meets [xa, xb].
-            let i0 = (xa.ceil() - 1.0).max(0.0);
-            let i1 = xb.floor().min(w - 1.0);
-            if i0 > i1 {
+            Some((x1.min(x2), x1.max(x2)))
+        };
+        let mut below = line(j0 as f64);
+        for j in j0..=j1 {
+            let (lo, hi) = (j as f64, j as f64 + 1.0);
+            let above = line(hi);
+            let mut xmin = f64::INFINITY;
+            let mut xmax = f64::NEG_INFINITY;
+            for (x0, x1) in [below, above].into_iter().flatten() {
+                xmin = xmin.min(x0);
+                xmax = xmax.max(x1);
+            }
+            for p in [a, b, c] {
+                if p[1] >= lo - E && p[1] <= hi + E {
+                    xmin = xmin.min(p[0]);
+                    xmax = xmax.max(p[0]);
+                }
+            }
+            below = above;
+            if xmin > xmax {
                 continue;
             }
-            mask.set_span(j, i0 as u32, i1 as u32);
+            // Columns whose closed interval [i, i+1] meets [xmin - E, xmax + E].
+            let i0 = (ceil_i(xmin - E) - 1).max(0);
+            let i1 = floor_i(xmax + E).min(w - 1);
+            if i0 <= i1 {
+                mask.set_span(j as u32, i0 as u32, i1 as u32);
+            }
         }
     }
 }
 
-/// The x-range of the triangle clipped to the slab `lo <= y <= hi`, or `None` when they do not
-/// meet. Takes corners inside the slab and the crossings of the edges with both slab lines.
-fn slab_x_range(tri: &[[f64; 2]; 3], lo: f64, hi: f64) -> Option<(f64, f64)> {
-    let mut xmin = f64::INFINITY;
-    let mut xmax = f64::NEG_INFINITY;
-    let mut take = |x: f64| {
-        xmin = xmin.min(x);
-        xmax = xmax.max(x);
-    };
-    for k in 0..3 {
-        let a = tri[k];
-        let b = tri[(k + 1) % 3];
-        if a[1] >= lo && a[1] <= hi {
-            take(a[0]);
-        }
-        let (ya, yb) = (a[1], b[1]);
-        if ya != yb {
-            for line in [lo, hi] {
-                if (ya < line) != (yb < line) {
-                    let t = ((line - ya) / (yb - ya)).clamp(0.0, 1.0);
-                    take(a[0] + t * (b[0] - a[0]));
-                }
-            }
-        }
+/// `floor` as an integer for |x| < 2^62, without a libm call.
+fn floor_i(x: f64) -> i64 {
+    let i = x as i64;
+    if (i as f64) > x {
+        i - 1
+    } else {
+        i
     }
-    (xmin <= xmax).then_some((xmin, xmax))
+}
+
+/// `ceil` as an integer for |x| < 2^62.
+fn ceil_i(x: f64) -> i64 {
+    -floor_i(-x)
 }
 
 #[cfg(test)]
@@ -366,7 +398,7 @@ mod tests {
             for p in &mut tri {
                 // Some corners on exact texel lines and corners, to hit the closed boundaries.
                 let snap = case % 3 == 0;
-                let mut c = |s: &mut u64| {
+                let c = |s: &mut u64| {
                     let v = 1.0 + 10.0 * xorshift(s);
                     if snap {
                         (v * 2.0).round() / 2.0

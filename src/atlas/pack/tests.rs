@@ -88,7 +88,7 @@ fn fixed_density_opens_pages_and_keeps_each_page_clean() {
     let options = PackOptions {
         width_texels: 256,
         height_texels: 256,
-        density: TexelDensity::TexelsPerUnit(60.0),
+        density: TexelDensity::TexelsPerUnit(30.0),
         ..PackOptions::default()
     };
     let (packing, check) = pack(&charts, &options);
@@ -97,9 +97,9 @@ fn fixed_density_opens_pages_and_keeps_each_page_clean() {
         "expected several pages, got {}",
         packing.num_pages
     );
-    assert_eq!(packing.texels_per_unit, 60.0);
+    assert_eq!(packing.texels_per_unit, 30.0);
     assert_guarantees(&check, "multi-page");
-    // The density is the one asked for: UV area in texels² = area_m2 × 60².
+    // The density is the one asked for: UV area in texels² = area_m2 × 30².
     let borrowed = as_pack_charts(&charts);
     let c = &borrowed[0];
     let uv = &packing.charts[0].uv;
@@ -111,7 +111,7 @@ fn fixed_density_opens_pages_and_keeps_each_page_clean() {
             0.5 * ((q[0] - p[0]) * (r[1] - p[1]) - (r[0] - p[0]) * (q[1] - p[1])).abs()
         })
         .sum();
-    assert!((a / (c.area_m2 * 3600.0) - 1.0).abs() < 1e-9);
+    assert!((a / (c.area_m2 * 900.0) - 1.0).abs() < 1e-9);
 }
 
 #[test]
@@ -310,23 +310,14 @@ fn the_checker_catches_overlap_and_padding_violations() {
     let borrowed = as_pack_charts(&charts);
     let packing = pack_charts(&borrowed, &options, &mut go).unwrap();
     assert_guarantees(&check_packing(&borrowed, &packing, &options), "baseline");
-    // Stack chart 1 onto chart 0: overlap.
+    // Stack chart 1 onto chart 0: the L's corner vertex 0 (all its triangles meet there) onto
+    // the disc's centre vertex 0: overlap.
     let mut stacked = packing.clone();
-    stacked.charts[1].uv =
-        stacked.charts[0].uv[..stacked.charts[1].uv.len().min(stacked.charts[0].uv.len())].to_vec();
-    let c0 = &packing.charts[0].uv;
-    let centre = [
-        c0.iter().map(|p| p[0]).sum::<f64>() / c0.len() as f64,
-        c0.iter().map(|p| p[1]).sum::<f64>() / c0.len() as f64,
-    ];
-    let c1 = &packing.charts[1].uv;
-    let lo = [
-        c1.iter().map(|p| p[0]).fold(1.0, f64::min),
-        c1.iter().map(|p| p[1]).fold(1.0, f64::min),
-    ];
-    stacked.charts[1].uv = c1
+    let (d0, l0) = (packing.charts[0].uv[0], packing.charts[1].uv[0]);
+    stacked.charts[1].uv = packing.charts[1]
+        .uv
         .iter()
-        .map(|p| [p[0] - lo[0] + centre[0], p[1] - lo[1] + centre[1]])
+        .map(|p| [p[0] - l0[0] + d0[0], p[1] - l0[1] + d0[1]])
         .collect();
     assert!(check_packing(&borrowed, &stacked, &options).overlap_texels > 0);
     // Move chart 2 until it is within the padding of another chart, one texel at a time.

@@ -26,8 +26,10 @@
 //! Units: distances in model units (`_m`), angles in radians (`_rad`), counts of edges.
 //!
 //! Code map: [`options`] (every option, unit, default), [`features`] (§3.1, Algorithm 1),
-//! [`grow`] (§3.2, Algorithm 2), this file (the disk guarantee, the chart-count cap, the
-//! [`ChartMesh`] extraction for the parameterizer).
+//! [`grow`] (§3.2, Algorithm 2), [`validate`] (§3.3: flatten every chart, split the invalid
+//! ones, merge back; [`validate_charts_with_monitor`] reports progress and can be cancelled;
+//! every chart leaves it with a map, zero-area faces included), this file (the disk guarantee,
+//! the chart-count cap, the [`ChartMesh`] extraction for the parameterizer).
 //!
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.
@@ -267,7 +269,7 @@ pub(super) fn disk_check(
     };
     let glued_inside = |h: HalfedgeId| mesh.opposite(h).filter(|o| inside(o.face()));
     // Connected through glued edges.
-    let reached = flood(mesh, &[first], inside).len();
+    let reached = flood(mesh, &[first], inside, faces).len();
     if reached != faces.len() {
         return Err(NotADisk::Disconnected {
             reached,
@@ -345,21 +347,46 @@ pub(super) fn disk_check(
     })
 }
 
+/// The chart's faces ascending: `faces` itself when already sorted, else a sorted copy.
+fn sorted_faces(faces: &[FaceId]) -> std::borrow::Cow<'_, [FaceId]> {
+    if faces.windows(2).all(|w| w[0] < w[1]) {
+        std::borrow::Cow::Borrowed(faces)
+    } else {
+        let mut v = faces.to_vec();
+        v.sort_unstable();
+        std::borrow::Cow::Owned(v)
+    }
+}
+
 /// Faces reachable from `seeds` through glued edges between faces that are `inside`, in
-/// breadth-first order.
-fn flood(mesh: &TriangleMesh, seeds: &[FaceId], inside: &dyn Fn(FaceId) -> bool) -> Vec<FaceId> {
-    let mut seen = std::collections::BTreeSet::new();
+/// breadth-first order. `faces` lists (at least) every face that is `inside` (any order); the
+/// visited set is a flag per entry of it, found by binary search (no per-mesh array, no tree).
+fn flood(
+    mesh: &TriangleMesh,
+    seeds: &[FaceId],
+    inside: &dyn Fn(FaceId) -> bool,
+    faces: &[FaceId],
+) -> Vec<FaceId> {
+    let sorted = sorted_faces(faces);
+    let mut seen = vec![false; sorted.len()];
+    let mut mark = |f: FaceId| match sorted.binary_search(&f) {
+        Ok(k) if !seen[k] => {
+            seen[k] = true;
+            true
+        }
+        _ => false,
+    };
     let mut order = Vec::new();
     let mut queue = VecDeque::new();
     for &s in seeds {
-        if seen.insert(s) {
+        if mark(s) {
             queue.push_back(s);
         }
     }
     while let Some(f) = queue.pop_front() {
         order.push(f);
         for g in mesh.face_neighbors(f).into_iter().flatten() {
-            if inside(g) && seen.insert(g) {
+            if inside(g) && mark(g) {
                 queue.push_back(g);
             }
         }
@@ -399,7 +426,7 @@ pub(super) fn enforce_disks(
         }
         let inside = |f: FaceId| label[f.index()] == id;
         // Split off glued components first.
-        let comp = flood(mesh, &faces[..1], &inside);
+        let comp = flood(mesh, &faces[..1], &inside, &faces);
         if comp.len() != faces.len() {
             stats.disk_splits += 1;
             let mut in_comp = comp.clone();
@@ -454,8 +481,10 @@ fn split_in_two(
     faces: &[FaceId],
     inside: &dyn Fn(FaceId) -> bool,
 ) -> (Vec<FaceId>, Vec<FaceId>) {
-    let a = *flood(mesh, &faces[..1], inside).last().unwrap_or(&faces[0]);
-    let b = *flood(mesh, &[a], inside).last().unwrap_or(&a);
+    let a = *flood(mesh, &faces[..1], inside, faces)
+        .last()
+        .unwrap_or(&faces[0]);
+    let b = *flood(mesh, &[a], inside, faces).last().unwrap_or(&a);
     grow_two(mesh, faces, inside, a, b)
 }
 
@@ -472,23 +501,43 @@ pub(super) fn grow_two(
     if a == b {
         return (faces.to_vec(), Vec::new());
     }
-    let mut side: std::collections::BTreeMap<FaceId, bool> = std::collections::BTreeMap::new();
-    side.insert(a, false);
-    side.insert(b, true);
-    let mut queue = VecDeque::from([a, b]);
+    // Side per face of the chart (by binary search in the sorted faces): 0 unset, 1 `a`, 2 `b`.
+    let sorted = sorted_faces(faces);
+    let mut side = vec![0u8; sorted.len()];
+    let slot = |f: FaceId| sorted.binary_search(&f).ok();
+    let mut queue = VecDeque::new();
+    for (seed, s) in [(a, 1u8), (b, 2u8)] {
+        if let Some(k) = slot(seed) {
+            side[k] = s;
+            queue.push_back(seed);
+        }
+    }
     while let Some(f) = queue.pop_front() {
-        let s = side[&f];
+        let s = slot(f).map_or(1, |k| side[k]);
         for g in mesh.face_neighbors(f).into_iter().flatten() {
-            if inside(g) && !side.contains_key(&g) {
-                side.insert(g, s);
-                queue.push_back(g);
+            if !inside(g) {
+                continue;
+            }
+            if let Some(k) = slot(g) {
+                if side[k] == 0 {
+                    side[k] = s;
+                    queue.push_back(g);
+                }
             }
         }
     }
-    let mut half_a: Vec<FaceId> = side.iter().filter(|(_, &s)| !s).map(|(&f, _)| f).collect();
-    let half_b = side.iter().filter(|(_, &s)| s).map(|(&f, _)| f).collect();
-    half_a.extend(faces.iter().filter(|f| !side.contains_key(f)));
-    half_a.sort_unstable();
+    let half_a: Vec<FaceId> = sorted
+        .iter()
+        .zip(&side)
+        .filter(|(_, &s)| s != 2)
+        .map(|(&f, _)| f)
+        .collect();
+    let half_b = sorted
+        .iter()
+        .zip(&side)
+        .filter(|(_, &s)| s == 2)
+        .map(|(&f, _)| f)
+        .collect();
     (half_a, half_b)
 }
 
@@ -546,19 +595,42 @@ fn merge_to_cap(mesh: &TriangleMesh, charts: &mut Vec<Vec<FaceId>>, cap: usize) 
 /// to global vertex ids. Local vertices are numbered in order of first use along `faces`;
 /// triangles keep `faces` order and corner order (orientation is preserved).
 pub fn chart_mesh(mesh: &TriangleMesh, faces: &[FaceId]) -> (ChartMesh, Vec<VertexId>) {
-    // Vertex ids sorted with their local index: O(k log k) lookups without a per-mesh array.
-    let mut local_of: std::collections::BTreeMap<VertexId, u32> = Default::default();
-    let mut global: Vec<VertexId> = Vec::new();
-    let mut triangles = Vec::with_capacity(faces.len());
-    for &f in faces {
-        let t = mesh.face_vertices(f).map(|v| {
-            *local_of.entry(v).or_insert_with(|| {
-                global.push(v);
-                (global.len() - 1) as u32
-            })
-        });
-        triangles.push(t);
+    // Local numbering by first use without a tree or a per-mesh array: sort the corners by
+    // vertex (then corner), so each vertex's first corner is the first of its run; number the
+    // vertices in the order of those first corners. O(k log k).
+    let mut corners: Vec<(VertexId, u32)> = Vec::with_capacity(3 * faces.len());
+    for (k, &f) in faces.iter().enumerate() {
+        for (c, v) in mesh.face_vertices(f).into_iter().enumerate() {
+            corners.push((v, (3 * k + c) as u32));
+        }
     }
+    corners.sort_unstable();
+    // (first corner, vertex) per distinct vertex, then by first corner.
+    let mut firsts: Vec<(u32, VertexId)> = Vec::new();
+    for (i, &(v, c)) in corners.iter().enumerate() {
+        if i == 0 || corners[i - 1].0 != v {
+            firsts.push((c, v));
+        }
+    }
+    firsts.sort_unstable();
+    let global: Vec<VertexId> = firsts.iter().map(|&(_, v)| v).collect();
+    let mut local_of_first: Vec<(VertexId, u32)> = firsts
+        .iter()
+        .enumerate()
+        .map(|(l, &(_, v))| (v, l as u32))
+        .collect();
+    local_of_first.sort_unstable();
+    let mut corner_local = vec![0u32; 3 * faces.len()];
+    let mut run = 0usize;
+    for (i, &(v, c)) in corners.iter().enumerate() {
+        if i > 0 && corners[i - 1].0 != v {
+            run += 1;
+        }
+        corner_local[c as usize] = local_of_first[run].1;
+    }
+    let triangles = (0..faces.len())
+        .map(|k| [0, 1, 2].map(|c| corner_local[3 * k + c]))
+        .collect();
     let positions_m = global.iter().map(|&v| mesh.position(v)).collect();
     (
         ChartMesh {

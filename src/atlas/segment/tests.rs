@@ -648,7 +648,7 @@ fn validation_bounds_the_area_ratio() {
     let map = crate::atlas::parameterize::parameterize_chart(&cm, &Default::default())
         .expect("a hemisphere is a disk");
     assert!(area_ratio(&cm, &map.uv) > 2.0, "test premise");
-    let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid options");
+    let v = validate_charts(&mesh, &seg, &ValidateOptions::paper()).expect("valid options");
     assert!(v.splits[2] >= 2, "{:?}", v.splits);
     assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
     // Bookkeeping: every split adds a chart (the disk guarantee may add more), every merge
@@ -832,4 +832,91 @@ fn the_monitor_sees_every_chart_and_can_cancel() {
         }
     });
     assert_eq!(r, Err(SegmentError::Cancelled));
+}
+
+/// Sander L2 stretch of one chart map, the chart scaled to UV area = model area, recomputed
+/// from the singular values of each face's Jacobian (the validator uses the derivative
+/// vectors): `L2² = Σ A3·(Γ² + γ²)/2 / Σ A3` with `Γ`, `γ` of the UV → 3-D map.
+fn chart_stretch(cm: &crate::atlas::parameterize::ChartMesh, uv: &[[f64; 2]]) -> f64 {
+    let (mut num, mut a3s, mut a2s) = (0.0, 0.0, 0.0);
+    for t in &cm.triangles {
+        let [p0, p1, p2] = t.map(|i| cm.positions_m[i as usize]);
+        // An orthonormal frame of the 3-D triangle: e1 along p0p1.
+        let d1 = [p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]];
+        let d2 = [p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]];
+        let l1 = (d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]).sqrt();
+        let x2 = (d1[0] * d2[0] + d1[1] * d2[1] + d1[2] * d2[2]) / l1;
+        let y2 = ((d2[0] * d2[0] + d2[1] * d2[1] + d2[2] * d2[2]) - x2 * x2)
+            .max(0.0)
+            .sqrt();
+        let a3 = 0.5 * l1 * y2;
+        let [q0, q1, q2] = t.map(|i| uv[i as usize]);
+        let e = [
+            [q1[0] - q0[0], q2[0] - q0[0]],
+            [q1[1] - q0[1], q2[1] - q0[1]],
+        ];
+        // J (3-D frame → UV) = E · X⁻¹ with X = [[l1, x2], [0, y2]]; the UV → 3-D map is J⁻¹.
+        let xi = [[1.0 / l1, -x2 / (l1 * y2)], [0.0, 1.0 / y2]];
+        let j = [
+            [e[0][0] * xi[0][0], e[0][0] * xi[0][1] + e[0][1] * xi[1][1]],
+            [e[1][0] * xi[0][0], e[1][0] * xi[0][1] + e[1][1] * xi[1][1]],
+        ];
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        let fro2 = j.iter().flatten().map(|x| x * x).sum::<f64>();
+        // Singular values of J⁻¹ are 1/σ of J: Γ² + γ² = (σ1² + σ2²) / (σ1 σ2)² = |J|²_F / det².
+        num += a3 * 0.5 * fro2 / (det * det);
+        a3s += a3;
+        a2s += 0.5 * det * l1 * y2;
+    }
+    (num / a3s * a2s / a3s).sqrt()
+}
+
+#[test]
+fn validation_bounds_the_chart_stretch_by_default() {
+    // A sphere cut into a large cap (down to z = -0.75) and a small one: the large cap
+    // flattened conformally has an L2 stretch far above 1.1.
+    let mesh = build(&fixtures::uv_sphere(16, 24, 1.0));
+    let north: Vec<FaceId> = mesh
+        .faces()
+        .filter(|&f| mesh.face_positions(f).iter().all(|p| p[2] >= -0.75))
+        .collect();
+    let south: Vec<FaceId> = mesh
+        .faces()
+        .filter(|f| north.binary_search(f).is_err())
+        .collect();
+    let seg = finish(&mesh, vec![north.clone(), south], SegmentStats::default());
+    let (cm, _) = chart_mesh(&mesh, &north);
+    let map = crate::atlas::parameterize::parameterize_chart(&cm, &Default::default())
+        .expect("a hemisphere is a disk");
+    let bound = ValidateOptions::default()
+        .max_stretch
+        .expect("a default bound");
+    let l2 = chart_stretch(&cm, &map.uv);
+    assert!(l2 > bound, "test premise: {l2}");
+    let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid options");
+    assert!(v.splits[2] >= 1, "{:?}", v.splits);
+    assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
+    assert_contract(&mesh, &v.segmentation);
+    assert_maps_contract(&mesh, &v);
+    for (c, m) in v.segmentation.charts.iter().zip(&v.maps) {
+        let (cm, _) = chart_mesh(&mesh, c);
+        let (map, _) = m.as_ref().expect("parameterized");
+        let l2 = chart_stretch(&cm, &map.uv);
+        assert!(l2 <= bound + 1e-9, "chart of {} faces has L2 {l2}", c.len());
+    }
+    for bad in [
+        ValidateOptions {
+            max_stretch: Some(0.9),
+            ..Default::default()
+        },
+        ValidateOptions {
+            area_ratio_trim: 0.5,
+            ..Default::default()
+        },
+    ] {
+        assert!(matches!(
+            validate_charts(&mesh, &seg, &bad),
+            Err(SegmentError::InvalidOption { .. })
+        ));
+    }
 }
