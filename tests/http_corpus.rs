@@ -1,0 +1,96 @@
+//! The service over the shared corpus (runs when `TEXATLAS_CORPUS_DIR` is set, as in `.ci/run`):
+//! the bunny-sized and glTF-feature assets go upload → poll → result through the real server and
+//! the real pipeline; each result decodes with every triangle, its report validates against
+//! `proto/report.schema.json`, and (when `TEXATLAS_GLTF_VALIDATOR` and `TEXATLAS_EVAL_DIR` are
+//! set) the Khronos glTF-Validator reports 0 errors.
+mod http_common;
+
+use std::path::PathBuf;
+use std::process::Command;
+use std::sync::Arc;
+use std::time::Duration;
+
+use http_common::*;
+use serde_json::Value;
+use texatlas::jobs::UnwrapProcessor;
+
+const ASSETS: &[&str] = &[
+    "bunny.glb",
+    "SimpleSkin.glb",
+    "AnimatedMorphCube.glb",
+    "BoxInterleaved.glb",
+];
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn corpus_assets_through_the_service() {
+    let Some(corpus) = std::env::var_os("TEXATLAS_CORPUS_DIR").map(PathBuf::from) else {
+        eprintln!("TEXATLAS_CORPUS_DIR not set: the HTTP corpus test is skipped");
+        return;
+    };
+    let s = Server::start_with(Arc::new(UnwrapProcessor::default()), |_| {}).await;
+    let c = reqwest::Client::new();
+    let out = tempfile::tempdir().unwrap();
+    for name in ASSETS {
+        let path = corpus.join(name);
+        let Ok(bytes) = std::fs::read(&path) else {
+            eprintln!("{} missing: skipped", path.display());
+            continue;
+        };
+        let job = submit_ok(&c, &s, bytes, "").await;
+        let id = job["id"].as_str().unwrap();
+        let done = poll_until(
+            &c,
+            &s.url(&format!("/v1/jobs/{id}")),
+            Duration::from_secs(600),
+            is_terminal,
+        )
+        .await;
+        assert_eq!(done["status"], "succeeded", "{name}: {done:#}");
+        let glb = c
+            .get(s.url(&format!("/v1/jobs/{id}/result")))
+            .send()
+            .await
+            .unwrap()
+            .bytes()
+            .await
+            .unwrap();
+        let asset = texatlas::gltf_io::decode(
+            &glb,
+            &texatlas::gltf_io::Resources::new(),
+            &texatlas::gltf_io::DecodeLimits::default(),
+        )
+        .unwrap_or_else(|e| panic!("{name}: result does not decode: {e}"));
+        assert_eq!(
+            asset.mesh_input().triangles.len() as u64,
+            done["triangles"].as_u64().unwrap(),
+            "{name}"
+        );
+        let report: Value = c
+            .get(s.url(&format!("/v1/jobs/{id}/report")))
+            .send()
+            .await
+            .unwrap()
+            .json()
+            .await
+            .unwrap();
+        assert_schema("Report", &report);
+        assert_eq!(report["quality"]["flipped"], 0, "{name}");
+        if let (Some(node_modules), Some(eval)) = (
+            std::env::var_os("TEXATLAS_GLTF_VALIDATOR"),
+            std::env::var_os("TEXATLAS_EVAL_DIR"),
+        ) {
+            let file = out.path().join(name);
+            std::fs::write(&file, &glb).unwrap();
+            let v = Command::new("node")
+                .env("NODE_PATH", node_modules)
+                .arg(PathBuf::from(eval).join("gltf_validate.js"))
+                .arg(&file)
+                .output()
+                .expect("run node");
+            let r: Value = serde_json::from_slice(&v.stdout).expect("validator JSON");
+            assert_eq!(r["errors"], 0, "{name}: validator {r}");
+        }
+        println!("{name}: {} triangles, succeeded", done["triangles"]);
+    }
+    s.stop().await.unwrap();
+}
