@@ -50,6 +50,9 @@ pub struct PreparedChart {
     pub area_m2: f64,
     /// False for a chart without vertices (nothing to place).
     pub has_vertices: bool,
+    /// Indices of the *outline* triangles ([`outline_triangles`]): the only ones rasterized,
+    /// since they cover the boundary of the chart and so decide every per-line extent.
+    pub outline: Vec<u32>,
 }
 
 /// Validates a chart and computes its density-independent data.
@@ -133,7 +136,75 @@ pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChar
         base_angle_rad,
         area_m2: if unit_scale > 0.0 { chart.area_m2 } else { 0.0 },
         has_vertices: !chart.uv.is_empty(),
+        outline: outline_triangles(chart.uv, chart.triangles),
     })
+}
+
+/// The triangles that can touch the boundary of the chart's UV region `U` (the union of its
+/// triangles): every triangle except those whose three edges are each shared with exactly one
+/// other triangle lying strictly on the other side of the edge (by a margin far above
+/// rounding). Such an edge is interior to `U`, and a vertex whose edges are all interior is
+/// too (its fan sweeps a whole number ≥ 1 of turns), so `∂U` lies in the union of the outline
+/// triangles.
+///
+/// Why it is enough: in any column (row) strip, the extreme point of `U` is a point of `∂U`,
+/// hence of an outline triangle, whose conservative raster then holds that extreme texel; and
+/// the extreme vertices in any direction are outline vertices. So the per-line extents and the
+/// bounding box of the outline triangles are those of all the triangles (the interior, which
+/// the extents ignore, is all that is skipped). Deterministic (sorted edges, no hash map).
+///
+/// Cost: O(t log t) for t triangles, once per chart.
+pub fn outline_triangles(uv: &[[f64; 2]], triangles: &[[u32; 3]]) -> Vec<u32> {
+    let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * triangles.len());
+    for (k, t) in triangles.iter().enumerate() {
+        for e in 0..3 {
+            let (a, b) = (t[e], t[(e + 1) % 3]);
+            edges.push((a.min(b), a.max(b), k as u32));
+        }
+    }
+    edges.sort_unstable();
+    let mut mark = vec![false; triangles.len()];
+    let opposite = |t: u32, a: u32, b: u32| -> Option<u32> {
+        let tri = triangles[t as usize];
+        let mut rest = tri.iter().filter(|&&v| v != a && v != b);
+        match (rest.next(), rest.next()) {
+            (Some(&o), None) => Some(o),
+            _ => None,
+        }
+    };
+    let mut g = 0;
+    while g < edges.len() {
+        let (a, b, _) = edges[g];
+        let mut end = g + 1;
+        while end < edges.len() && edges[end].0 == a && edges[end].1 == b {
+            end += 1;
+        }
+        let interior = end - g == 2
+            && a != b
+            && match (opposite(edges[g].2, a, b), opposite(edges[g + 1].2, a, b)) {
+                (Some(o1), Some(o2)) => {
+                    let (pa, pb) = (uv[a as usize], uv[b as usize]);
+                    let (q1, q2) = (uv[o1 as usize], uv[o2 as usize]);
+                    let m = [pa, pb, q1, q2]
+                        .iter()
+                        .map(|p| p[0].abs().max(p[1].abs()))
+                        .fold(0.0, f64::max);
+                    let tol = 1e-12 * m * m;
+                    let (s1, s2) = (cross(pa, pb, q1), cross(pa, pb, q2));
+                    (s1 > tol && s2 < -tol) || (s1 < -tol && s2 > tol)
+                }
+                _ => false,
+            };
+        if !interior {
+            for e in &edges[g..end] {
+                mark[e.2 as usize] = true;
+            }
+        }
+        g = end;
+    }
+    (0..triangles.len() as u32)
+        .filter(|&k| mark[k as usize])
+        .collect()
 }
 
 /// Per-line extents of a footprint: for each column the first and last row, for each row the
@@ -287,10 +358,14 @@ fn orient(
         [m[0][0] * x + m[0][1] * y, m[1][0] * x + m[1][1] * y]
     };
     let (lo, hi) = bounds(
-        &chart
-            .triangles
+        &prep
+            .outline
             .iter()
-            .flat_map(|t| t.iter().map(|&i| rotated(chart.uv[i as usize])))
+            .flat_map(|&t| {
+                chart.triangles[t as usize]
+                    .iter()
+                    .map(|&i| rotated(chart.uv[i as usize]))
+            })
             .collect::<Vec<_>>(),
     );
     let (lo, hi) = if lo[0] <= hi[0] {
@@ -325,10 +400,9 @@ fn orient(
     let mut mask = Mask::new(dims[0] as u32, dims[1] as u32);
     rasterize_conservative(
         &mut mask,
-        chart
-            .triangles
-            .iter()
-            .map(|t| t.map(|i| o.apply(prep.centre, chart.uv[i as usize]))),
+        prep.outline.iter().map(|&t| {
+            chart.triangles[t as usize].map(|i| o.apply(prep.centre, chart.uv[i as usize]))
+        }),
     );
     if chart.triangles.is_empty() {
         // A chart without triangles still gets its one texel.
@@ -441,6 +515,38 @@ mod tests {
                 .fold(0.0, f64::max);
             assert!((d(hull[a], hull[b]) - brute).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn outline_triangles_give_the_extents_and_box_of_all_triangles() {
+        let sets = [
+            crate::atlas::pack::test_charts::mixed_set(40, 7),
+            crate::atlas::pack::test_charts::realistic_set(2),
+        ];
+        let mut skipped = 0usize;
+        let mut total = 0usize;
+        for set in &sets {
+            for (i, owned) in set.iter().enumerate() {
+                let chart = owned.as_pack_chart();
+                let prep = prepare_chart(i, &chart).unwrap();
+                skipped += chart.triangles.len() - prep.outline.len();
+                total += chart.triangles.len();
+                let all = PreparedChart {
+                    outline: (0..chart.triangles.len() as u32).collect(),
+                    ..prep.clone()
+                };
+                for density in [3.0, 17.5, 90.0] {
+                    let a = orientations(&chart, &prep, density, 8, 2, [1024, 1024]);
+                    let b = orientations(&chart, &all, density, 8, 2, [1024, 1024]);
+                    for (x, y) in a.iter().zip(&b) {
+                        assert_eq!(x.affine, y.affine, "chart {i}");
+                        assert_eq!(x.footprint, y.footprint, "chart {i}");
+                        assert_eq!(x.dilated, y.dilated, "chart {i}");
+                    }
+                }
+            }
+        }
+        assert!(skipped > 0 && skipped < total, "{skipped} of {total}");
     }
 
     #[test]
