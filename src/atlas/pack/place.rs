@@ -27,11 +27,15 @@
 //! Cost: per orientation rasterized, O(triangles × rows per triangle + D texels / 64 × padding);
 //! orientations wider or taller than the page are not rasterized (bounded memory whatever the
 //! trial density).
-use super::raster::{rasterize_conservative, Mask};
+use super::raster::{rasterize_centres, rasterize_conservative, Mask};
 use super::{PackChart, PackError};
 
 /// Margin kept between a chart's extreme vertices and the texel lines of its span, texels.
 pub const LAYOUT_EPS_TEXELS: f64 = 1e-3;
+
+/// How far each triangle is grown before its texel centres are sampled, texels: far above the
+/// `f32` rounding of written UVs (2⁻²⁴ × page side ≤ 10⁻³ texels for pages ≤ 16384).
+pub const CENTRE_GROW_TEXELS: f64 = 0.01;
 
 /// Empty line of an extents array.
 pub const EMPTY: (i32, i32) = (i32::MAX, i32::MIN);
@@ -398,18 +402,69 @@ fn orient(
         return o;
     }
     let mut mask = Mask::new(dims[0] as u32, dims[1] as u32);
-    rasterize_conservative(
+    rasterize_centres(
         &mut mask,
-        prep.outline.iter().map(|&t| {
-            chart.triangles[t as usize].map(|i| o.apply(prep.centre, chart.uv[i as usize]))
-        }),
+        chart
+            .triangles
+            .iter()
+            .map(|t| t.map(|i| o.apply(prep.centre, chart.uv[i as usize]))),
+        CENTRE_GROW_TEXELS,
     );
+    if mask.count() == 0 {
+        // Samples no texel centre (a tiny chart): its conservative footprint, never empty.
+        rasterize_conservative(
+            &mut mask,
+            prep.outline.iter().map(|&t| {
+                chart.triangles[t as usize].map(|i| o.apply(prep.centre, chart.uv[i as usize]))
+            }),
+        );
+    }
     if chart.triangles.is_empty() {
         // A chart without triangles still gets its one texel.
         mask.set_span(padding_texels, padding_texels, padding_texels);
     }
-    o.footprint = Some(Extents::of(&mask));
-    o.dilated = Some(Extents::of(&mask.dilate(padding_texels)));
+    let f = Extents::of(&mask);
+    let d = Extents::of(&mask.dilate(padding_texels));
+    // Sampled footprints need not reach the grid's margin: trim the grid to `D` (the grid is
+    // the chart's box for the packer).
+    let span = |v: &[(i32, i32)]| {
+        let first = v.iter().position(|&e| e != EMPTY)?;
+        let last = v.iter().rposition(|&e| e != EMPTY)?;
+        Some((first, last))
+    };
+    let (Some((x0, x1)), Some((y0, y1))) = (span(&d.cols), span(&d.rows)) else {
+        o.footprint = Some(f);
+        o.dilated = Some(d);
+        return o;
+    };
+    // The grid keeps the whole chart too (its texel span, inside the padding margin), so that
+    // keeping the grid on the page keeps every UV in [0,1].
+    let pad = padding_texels as usize;
+    let (x0, x1) = (x0.min(pad), x1.max(dims[0] as usize - 1 - pad));
+    let (y0, y1) = (y0.min(pad), y1.max(dims[1] as usize - 1 - pad));
+    let cut = |e: &Extents| {
+        let shift = |v: &[(i32, i32)], by: i32| -> Vec<(i32, i32)> {
+            v.iter()
+                .map(|&(a, b)| {
+                    if (a, b) == EMPTY {
+                        EMPTY
+                    } else {
+                        (a - by, b - by)
+                    }
+                })
+                .collect()
+        };
+        Extents {
+            cols: shift(&e.cols[x0..=x1], y0 as i32),
+            rows: shift(&e.rows[y0..=y1], x0 as i32),
+        }
+    };
+    o.affine[0][2] -= x0 as f64;
+    o.affine[1][2] -= y0 as f64;
+    o.width_texels = (x1 - x0 + 1) as i64;
+    o.height_texels = (y1 - y0 + 1) as i64;
+    o.footprint = Some(cut(&f));
+    o.dilated = Some(cut(&d));
     o
 }
 
