@@ -402,21 +402,20 @@ fn orient(
         return o;
     }
     let mut mask = Mask::new(dims[0] as u32, dims[1] as u32);
-    rasterize_centres(
+    // Every vertex once (not once per triangle corner).
+    let local: Vec<[f64; 2]> = chart.uv.iter().map(|&p| o.apply(prep.centre, p)).collect();
+    let sampled = rasterize_centres(
         &mut mask,
-        chart
-            .triangles
-            .iter()
-            .map(|t| t.map(|i| o.apply(prep.centre, chart.uv[i as usize]))),
+        chart.triangles.iter().map(|t| t.map(|i| local[i as usize])),
         CENTRE_GROW_TEXELS,
     );
-    if mask.count() == 0 {
+    if !sampled {
         // Samples no texel centre (a tiny chart): its conservative footprint, never empty.
         rasterize_conservative(
             &mut mask,
-            prep.outline.iter().map(|&t| {
-                chart.triangles[t as usize].map(|i| o.apply(prep.centre, chart.uv[i as usize]))
-            }),
+            prep.outline
+                .iter()
+                .map(|&t| chart.triangles[t as usize].map(|i| local[i as usize])),
         );
     }
     if chart.triangles.is_empty() {

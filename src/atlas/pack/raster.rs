@@ -336,14 +336,17 @@ pub fn rasterize_conservative(mask: &mut Mask, triangles: impl IntoIterator<Item
 /// Triangles too thin for a stable edge normal are rasterized conservatively instead
 /// ([`rasterize_conservative`], a superset of the grown triangle's centres).
 ///
+/// Returns whether it marked anything (or rasterized a thin triangle conservatively).
+///
 /// Cost: O(rows spanned) per triangle plus the spans written.
 pub fn rasterize_centres(
     mask: &mut Mask,
     triangles: impl IntoIterator<Item = [[f64; 2]; 3]>,
     grow_texels: f64,
-) {
+) -> bool {
+    let mut any = false;
     if mask.width() == 0 || mask.height() == 0 {
-        return;
+        return any;
     }
     let (w, h) = (i64::from(mask.width()), i64::from(mask.height()));
     let g = grow_texels.max(0.0);
@@ -354,45 +357,49 @@ pub fn rasterize_centres(
             continue;
         }
         let [a, b, c] = t;
+        let xmin = a[0].min(b[0]).min(c[0]);
+        let xmax = a[0].max(b[0]).max(c[0]);
+        let ymin = a[1].min(b[1]).min(c[1]);
+        let ymax = a[1].max(b[1]).max(c[1]);
+        let span = (xmax - xmin).max(ymax - ymin);
         let area2 = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-        let span = t
-            .iter()
-            .flat_map(|p| {
-                t.iter()
-                    .map(move |q| (p[0] - q[0]).abs().max((p[1] - q[1]).abs()))
-            })
-            .fold(0.0, f64::max);
         if !(area2.abs() > 1e-6 * span * span && span > 1e-9) {
             rasterize_conservative(mask, [t]);
+            any = true;
+            continue;
+        }
+        // Centres j + 0.5 in the grown box; none: nothing to do (most small triangles).
+        let j0 = ceil_i(ymin - g - 0.5).max(0);
+        let j1 = floor_i(ymax + g - 0.5).min(h - 1);
+        let c0 = ceil_i(xmin - g - 0.5).max(0);
+        let c1 = floor_i(xmax + g - 0.5).min(w - 1);
+        if j0 > j1 || c0 > c1 {
             continue;
         }
         // Counter-clockwise in the sign of area2 > 0: inside is cross(p, q, x) >= 0 per edge.
+        // Each edge is pushed out by g·(|ea| + |eb|) >= g·|normal| (no square root needed).
         let t = if area2 > 0.0 { t } else { [a, c, b] };
         let mut lines = [(0.0f64, 0.0f64, 0.0f64); 3];
         for k in 0..3 {
             let (p, q) = (t[k], t[(k + 1) % 3]);
             let (ea, eb) = (-(q[1] - p[1]), q[0] - p[0]);
-            let len = ea.hypot(eb);
-            let (ea, eb) = (ea / len, eb / len);
-            // ea·x + eb·y + ec >= 0 inside the grown triangle.
-            lines[k] = (ea, eb, -(ea * p[0] + eb * p[1]) + g);
+            // Stored divided by ea (x bound = -(eb·y + ec) / ea); ea = 0 keeps the raw line.
+            let ec = -(ea * p[0] + eb * p[1]) + g * (ea.abs() + eb.abs());
+            lines[k] = if ea != 0.0 {
+                (ea, eb / ea, ec / ea)
+            } else {
+                (0.0, eb, ec)
+            };
         }
-        let xmin = t.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min) - g;
-        let xmax = t.iter().map(|p| p[0]).fold(f64::NEG_INFINITY, f64::max) + g;
-        let ymin = t.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min) - g;
-        let ymax = t.iter().map(|p| p[1]).fold(f64::NEG_INFINITY, f64::max) + g;
-        // Centres j + 0.5 in [ymin, ymax].
-        let j0 = ceil_i(ymin - 0.5).max(0);
-        let j1 = floor_i(ymax - 0.5).min(h - 1);
         for j in j0..=j1 {
             let y = j as f64 + 0.5;
-            let (mut xl, mut xr) = (xmin, xmax);
+            let (mut xl, mut xr) = (xmin - g, xmax + g);
             for &(ea, eb, ec) in &lines {
                 let r = eb * y + ec;
                 if ea > 0.0 {
-                    xl = xl.max(-r / ea);
+                    xl = xl.max(-r);
                 } else if ea < 0.0 {
-                    xr = xr.min(-r / ea);
+                    xr = xr.min(-r);
                 } else if r < 0.0 {
                     xl = f64::INFINITY;
                 }
@@ -400,13 +407,15 @@ pub fn rasterize_centres(
             if !(xl <= xr) {
                 continue;
             }
-            let i0 = ceil_i(xl - 0.5).max(0);
-            let i1 = floor_i(xr - 0.5).min(w - 1);
+            let i0 = ceil_i(xl - 0.5).max(c0);
+            let i1 = floor_i(xr - 0.5).min(c1);
             if i0 <= i1 {
                 mask.set_span(j as u32, i0 as u32, i1 as u32);
+                any = true;
             }
         }
     }
+    any
 }
 
 /// `floor` as an integer for |x| < 2^62, without a libm call.
@@ -544,7 +553,8 @@ mod tests {
                 continue;
             }
             let mut mask = Mask::new(14, 14);
-            rasterize_centres(&mut mask, [tri], 0.01);
+            let marked = rasterize_centres(&mut mask, [tri], 0.01);
+            assert_eq!(marked, mask.count() > 0, "case {case}");
             let mut conservative = Mask::new(14, 14);
             rasterize_conservative(&mut conservative, [tri]);
             for j in 0..14 {
