@@ -404,7 +404,7 @@ pub fn rasterize_centres(
                     xl = f64::INFINITY;
                 }
             }
-            if !(xl <= xr) {
+            if xl.is_nan() || xr.is_nan() || xl > xr {
                 continue;
             }
             let i0 = ceil_i(xl - 0.5).max(c0);
