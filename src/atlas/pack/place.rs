@@ -2,7 +2,9 @@
 //!
 //! Purpose: turn one input chart into the candidate *orientations* the horizon packer chooses
 //! from. Each orientation is an affine map from the chart's UVs (model units) to local texel
-//! coordinates, with the chart's conservative footprint `F` ([`super::raster`]) and `F` dilated
+//! coordinates, with the chart's footprint `F` (texel centres in its slightly grown triangles,
+//! [`super::raster::rasterize_centres`]; the conservative raster of its outline triangles when
+//! it covers no centre) and `F` dilated
 //! by the padding (`D`), both summarised as per-column and per-row extents (the horizons of
 //! lscm-2002 §4 step 3, "with an additional margin").
 //!
@@ -14,9 +16,10 @@
 //!   over a full turn are tried (isocharts-2004 §6: 16). When `rotations` is a multiple of 4,
 //!   only the first quarter is rasterized: a quarter turn maps the texel grid onto itself, so
 //!   the other footprints are the same extents re-indexed (exact, no re-rasterization).
-//! - Layout: the footprint `F` sits in a grid with a `padding`-texel margin on every side
-//!   (`D` fits the grid exactly); the chart is centred in its texel span so that both ends keep
-//!   a margin of [`LAYOUT_EPS_TEXELS`] from the texel lines.
+//! - Layout: the chart is centred in its texel span (a margin of [`LAYOUT_EPS_TEXELS`] from
+//!   the texel lines) inside a grid with a `padding`-texel margin on every side; the grid is
+//!   then trimmed to the union of `D` and that span (so the packer's box holds the whole chart
+//!   and `D`).
 //! - Degenerate charts (zero UV area, zero 3-D area, no triangles) collapse to a point at a
 //!   texel centre: a one-texel footprint, never a NaN.
 //!
@@ -262,7 +265,7 @@ pub struct Orientation {
     /// Extents of `D` (footprint dilated by the padding); `None` when the grid exceeds the page
     /// (not rasterized).
     pub dilated: Option<Extents>,
-    /// Extents of `F` (the conservative footprint itself), same grid.
+    /// Extents of `F` (the footprint itself), same grid.
     pub footprint: Option<Extents>,
 }
 
