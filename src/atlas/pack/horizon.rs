@@ -143,10 +143,15 @@ impl HorizonPage {
                     })
             })
             .collect();
-        let per_side = |side: Side| -> Best {
+        // `start`: the best of the sides searched before (a candidate must beat it strictly,
+        // as in the reduction below). Waste is never negative, so a zero ends the search.
+        let per_side = |side: Side, start: Best| -> Best {
+            let mut best: Best = start;
+            if best.is_some_and(|b| b.0 == 0) {
+                return best;
+            }
             let wall = self.wall(side);
             let prefix = prefix_sums(&wall);
-            let mut best: Best = None;
             for (k, o) in orientations.iter().enumerate() {
                 if usable[k] {
                     self.search(side, &wall, &prefix, k, o, &mut best);
@@ -166,9 +171,15 @@ impl HorizonPage {
             * i64::from(bw + bh);
         let results: Vec<Best> = if work > PARALLEL_WORK {
             use rayon::prelude::*;
-            sides.par_iter().map(|&s| per_side(s)).collect()
+            sides.par_iter().map(|&s| per_side(s, None)).collect()
         } else {
-            sides.iter().map(|&s| per_side(s)).collect()
+            // Sequentially, each side starts from the best so far: it only keeps a candidate
+            // that beats it strictly, which is what the reduction would keep (same result).
+            let mut best: Best = None;
+            for &s in &sides {
+                best = per_side(s, best);
+            }
+            vec![best]
         };
         let mut best: Best = None;
         for r in results.into_iter().flatten() {
@@ -288,6 +299,12 @@ impl HorizonPage {
             ),
         };
         let plus = matches!(side, Side::PlusY | Side::PlusX);
+        let t_min = i64::from(match side {
+            Side::PlusY => y1 - bh,
+            Side::MinusY => h - y0 - bh,
+            Side::PlusX => x1 - bw,
+            Side::MinusX => w - x0 - bw,
+        });
         // prof[c]: the chart's near edge in line c, in the side's t coordinate; an empty line
         // gets a huge value so that it never constrains (wall - prof stays very negative).
         const NO_LINE: i32 = 1 << 29;
@@ -331,6 +348,10 @@ impl HorizonPage {
         }
         const CHUNK: usize = 32;
         for (i, &t0) in t_key.iter().enumerate() {
+            if best.is_some_and(|b| b.0 == 0) {
+                // Waste is never negative: nothing can beat a perfect fit.
+                return;
+            }
             let pos = lo + i as i32;
             let p = pos as usize;
             let wall_sum = if dense {
@@ -363,7 +384,12 @@ impl HorizonPage {
             if rejected {
                 continue;
             }
-            let t = i64::from(t);
+            // The grid's near side must keep the box within the bound too (a sampled footprint
+            // need not reach its grid's side): moving out is always allowed.
+            let t = i64::from(t).max(t_min);
+            if reject(t) {
+                continue;
+            }
             let waste = n * t + base;
             let (x, y) = match side {
                 Side::PlusY => (pos, t as i32),

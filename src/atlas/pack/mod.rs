@@ -7,10 +7,13 @@
 //!
 //! **Stage contract (GUIDE.md).** Charts never overlap, keep `padding_texels` empty texels
 //! between each other and from the page edge, and stay inside \[0,1\]². Exactly: the
-//! conservative footprints (every texel a triangle touches) of two charts on a page are at
-//! Chebyshev distance `> padding_texels`, and every footprint texel is at least
-//! `padding_texels` from the page edge, so the texel-centre sampled coverage of the
-//! independent evaluator (`../shared/eval/atlas_eval.py`, "padding.violation_texels") is too.
+//! footprints (every texel whose centre lies in a triangle grown by
+//! [`place::CENTRE_GROW_TEXELS`], a superset of the texel-centre sampled coverage of the
+//! independent evaluator `../shared/eval/atlas_eval.py`, also after `f32` rounding) of two
+//! charts on a page are at Chebyshev distance `> padding_texels`, and every footprint texel is
+//! at least `padding_texels` from the page edge ("padding.violation_texels" = 0). Charts too
+//! small to cover a texel centre use their conservative footprint (every texel touched). The
+//! whole chart stays inside its grid, which stays on the page (UVs in \[0,1\]).
 //! Every chart has the same density: placed UV area = `area_m2 × texels_per_unit²` texels².
 //! Deterministic: integer horizons, fixed orders, ties by index; no hash maps, no threads.
 //!
@@ -18,9 +21,10 @@
 //! normalized page coordinates in \[0,1\]² (u right, v down, glTF convention); sizes on the page
 //! are in texels (`_texels`); densities in texels per model unit.
 //!
-//! Code map: [`raster`] (conservative footprints and Chebyshev dilation), [`place`] (density,
-//! diameter orientation, rotations, per-line footprint extents), [`horizon`] (the four-direction
-//! horizon packer, one page), this file (options, the fit-to-page density search, output).
+//! Code map: [`raster`] (centre-sampled and conservative footprints, Chebyshev dilation),
+//! [`place`] (density, diameter orientation, rotations, outline triangles, per-line footprint
+//! extents), [`horizon`] (the four-direction horizon packer, one page), this file (options, the
+//! fit-to-page density search, output).
 //!
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §4; K. Zhou, J. Snyder, B. Guo,
@@ -172,9 +176,9 @@ pub const FIT_TOLERANCE: f64 = 3e-3;
 /// the page edge, all UVs in \[0,1\]. `monitor((done, total))` is called between charts; `Break`
 /// cancels with [`PackError::Cancelled`].
 ///
-/// Guarantees: the conservative footprints ([`raster`]) of any two charts on a page are more
-/// than `padding_texels` apart (Chebyshev) and at least `padding_texels` from the page edge, so
-/// texel-centre sampled coverage is too; every chart has the same density (placed UV area =
+/// Guarantees: the footprints ([`raster::rasterize_centres`], a superset of texel-centre
+/// sampled coverage) of any two charts on a page are more than `padding_texels` apart
+/// (Chebyshev) and at least `padding_texels` from the page edge; every chart has the same density (placed UV area =
 /// `area_m2 × texels_per_unit²` texels²); UVs finite in \[0,1\]; deterministic.
 ///
 /// Errors: [`PackError::InvalidOption`], [`PackError::InvalidChart`],

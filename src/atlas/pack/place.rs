@@ -2,7 +2,9 @@
 //!
 //! Purpose: turn one input chart into the candidate *orientations* the horizon packer chooses
 //! from. Each orientation is an affine map from the chart's UVs (model units) to local texel
-//! coordinates, with the chart's conservative footprint `F` ([`super::raster`]) and `F` dilated
+//! coordinates, with the chart's footprint `F` (texel centres in its slightly grown triangles,
+//! [`super::raster::rasterize_centres`]; the conservative raster of its outline triangles when
+//! it covers no centre) and `F` dilated
 //! by the padding (`D`), both summarised as per-column and per-row extents (the horizons of
 //! lscm-2002 §4 step 3, "with an additional margin").
 //!
@@ -14,9 +16,10 @@
 //!   over a full turn are tried (isocharts-2004 §6: 16). When `rotations` is a multiple of 4,
 //!   only the first quarter is rasterized: a quarter turn maps the texel grid onto itself, so
 //!   the other footprints are the same extents re-indexed (exact, no re-rasterization).
-//! - Layout: the footprint `F` sits in a grid with a `padding`-texel margin on every side
-//!   (`D` fits the grid exactly); the chart is centred in its texel span so that both ends keep
-//!   a margin of [`LAYOUT_EPS_TEXELS`] from the texel lines.
+//! - Layout: the chart is centred in its texel span (a margin of [`LAYOUT_EPS_TEXELS`] from
+//!   the texel lines) inside a grid with a `padding`-texel margin on every side; the grid is
+//!   then trimmed to the union of `D` and that span (so the packer's box holds the whole chart
+//!   and `D`).
 //! - Degenerate charts (zero UV area, zero 3-D area, no triangles) collapse to a point at a
 //!   texel centre: a one-texel footprint, never a NaN.
 //!
@@ -27,11 +30,15 @@
 //! Cost: per orientation rasterized, O(triangles × rows per triangle + D texels / 64 × padding);
 //! orientations wider or taller than the page are not rasterized (bounded memory whatever the
 //! trial density).
-use super::raster::{rasterize_conservative, Mask};
+use super::raster::{rasterize_centres, rasterize_conservative, Mask};
 use super::{PackChart, PackError};
 
 /// Margin kept between a chart's extreme vertices and the texel lines of its span, texels.
 pub const LAYOUT_EPS_TEXELS: f64 = 1e-3;
+
+/// How far each triangle is grown before its texel centres are sampled, texels: far above the
+/// `f32` rounding of written UVs (2⁻²⁴ × page side ≤ 10⁻³ texels for pages ≤ 16384).
+pub const CENTRE_GROW_TEXELS: f64 = 0.01;
 
 /// Empty line of an extents array.
 pub const EMPTY: (i32, i32) = (i32::MAX, i32::MIN);
@@ -50,6 +57,9 @@ pub struct PreparedChart {
     pub area_m2: f64,
     /// False for a chart without vertices (nothing to place).
     pub has_vertices: bool,
+    /// Indices of the *outline* triangles ([`outline_triangles`]): the only ones rasterized,
+    /// since they cover the boundary of the chart and so decide every per-line extent.
+    pub outline: Vec<u32>,
 }
 
 /// Validates a chart and computes its density-independent data.
@@ -133,7 +143,75 @@ pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChar
         base_angle_rad,
         area_m2: if unit_scale > 0.0 { chart.area_m2 } else { 0.0 },
         has_vertices: !chart.uv.is_empty(),
+        outline: outline_triangles(chart.uv, chart.triangles),
     })
+}
+
+/// The triangles that can touch the boundary of the chart's UV region `U` (the union of its
+/// triangles): every triangle except those whose three edges are each shared with exactly one
+/// other triangle lying strictly on the other side of the edge (by a margin far above
+/// rounding). Such an edge is interior to `U`, and a vertex whose edges are all interior is
+/// too (its fan sweeps a whole number ≥ 1 of turns), so `∂U` lies in the union of the outline
+/// triangles.
+///
+/// Why it is enough: in any column (row) strip, the extreme point of `U` is a point of `∂U`,
+/// hence of an outline triangle, whose conservative raster then holds that extreme texel; and
+/// the extreme vertices in any direction are outline vertices. So the per-line extents and the
+/// bounding box of the outline triangles are those of all the triangles (the interior, which
+/// the extents ignore, is all that is skipped). Deterministic (sorted edges, no hash map).
+///
+/// Cost: O(t log t) for t triangles, once per chart.
+pub fn outline_triangles(uv: &[[f64; 2]], triangles: &[[u32; 3]]) -> Vec<u32> {
+    let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * triangles.len());
+    for (k, t) in triangles.iter().enumerate() {
+        for e in 0..3 {
+            let (a, b) = (t[e], t[(e + 1) % 3]);
+            edges.push((a.min(b), a.max(b), k as u32));
+        }
+    }
+    edges.sort_unstable();
+    let mut mark = vec![false; triangles.len()];
+    let opposite = |t: u32, a: u32, b: u32| -> Option<u32> {
+        let tri = triangles[t as usize];
+        let mut rest = tri.iter().filter(|&&v| v != a && v != b);
+        match (rest.next(), rest.next()) {
+            (Some(&o), None) => Some(o),
+            _ => None,
+        }
+    };
+    let mut g = 0;
+    while g < edges.len() {
+        let (a, b, _) = edges[g];
+        let mut end = g + 1;
+        while end < edges.len() && edges[end].0 == a && edges[end].1 == b {
+            end += 1;
+        }
+        let interior = end - g == 2
+            && a != b
+            && match (opposite(edges[g].2, a, b), opposite(edges[g + 1].2, a, b)) {
+                (Some(o1), Some(o2)) => {
+                    let (pa, pb) = (uv[a as usize], uv[b as usize]);
+                    let (q1, q2) = (uv[o1 as usize], uv[o2 as usize]);
+                    let m = [pa, pb, q1, q2]
+                        .iter()
+                        .map(|p| p[0].abs().max(p[1].abs()))
+                        .fold(0.0, f64::max);
+                    let tol = 1e-12 * m * m;
+                    let (s1, s2) = (cross(pa, pb, q1), cross(pa, pb, q2));
+                    (s1 > tol && s2 < -tol) || (s1 < -tol && s2 > tol)
+                }
+                _ => false,
+            };
+        if !interior {
+            for e in &edges[g..end] {
+                mark[e.2 as usize] = true;
+            }
+        }
+        g = end;
+    }
+    (0..triangles.len() as u32)
+        .filter(|&k| mark[k as usize])
+        .collect()
 }
 
 /// Per-line extents of a footprint: for each column the first and last row, for each row the
@@ -187,7 +265,7 @@ pub struct Orientation {
     /// Extents of `D` (footprint dilated by the padding); `None` when the grid exceeds the page
     /// (not rasterized).
     pub dilated: Option<Extents>,
-    /// Extents of `F` (the conservative footprint itself), same grid.
+    /// Extents of `F` (the footprint itself), same grid.
     pub footprint: Option<Extents>,
 }
 
@@ -287,10 +365,14 @@ fn orient(
         [m[0][0] * x + m[0][1] * y, m[1][0] * x + m[1][1] * y]
     };
     let (lo, hi) = bounds(
-        &chart
-            .triangles
+        &prep
+            .outline
             .iter()
-            .flat_map(|t| t.iter().map(|&i| rotated(chart.uv[i as usize])))
+            .flat_map(|&t| {
+                chart.triangles[t as usize]
+                    .iter()
+                    .map(|&i| rotated(chart.uv[i as usize]))
+            })
             .collect::<Vec<_>>(),
     );
     let (lo, hi) = if lo[0] <= hi[0] {
@@ -323,19 +405,68 @@ fn orient(
         return o;
     }
     let mut mask = Mask::new(dims[0] as u32, dims[1] as u32);
-    rasterize_conservative(
+    // Every vertex once (not once per triangle corner).
+    let local: Vec<[f64; 2]> = chart.uv.iter().map(|&p| o.apply(prep.centre, p)).collect();
+    let sampled = rasterize_centres(
         &mut mask,
-        chart
-            .triangles
-            .iter()
-            .map(|t| t.map(|i| o.apply(prep.centre, chart.uv[i as usize]))),
+        chart.triangles.iter().map(|t| t.map(|i| local[i as usize])),
+        CENTRE_GROW_TEXELS,
     );
+    if !sampled {
+        // Samples no texel centre (a tiny chart): its conservative footprint, never empty.
+        rasterize_conservative(
+            &mut mask,
+            prep.outline
+                .iter()
+                .map(|&t| chart.triangles[t as usize].map(|i| local[i as usize])),
+        );
+    }
     if chart.triangles.is_empty() {
         // A chart without triangles still gets its one texel.
         mask.set_span(padding_texels, padding_texels, padding_texels);
     }
-    o.footprint = Some(Extents::of(&mask));
-    o.dilated = Some(Extents::of(&mask.dilate(padding_texels)));
+    let f = Extents::of(&mask);
+    let d = Extents::of(&mask.dilate(padding_texels));
+    // Sampled footprints need not reach the grid's margin: trim the grid to `D` (the grid is
+    // the chart's box for the packer).
+    let span = |v: &[(i32, i32)]| {
+        let first = v.iter().position(|&e| e != EMPTY)?;
+        let last = v.iter().rposition(|&e| e != EMPTY)?;
+        Some((first, last))
+    };
+    let (Some((x0, x1)), Some((y0, y1))) = (span(&d.cols), span(&d.rows)) else {
+        o.footprint = Some(f);
+        o.dilated = Some(d);
+        return o;
+    };
+    // The grid keeps the whole chart too (its texel span, inside the padding margin), so that
+    // keeping the grid on the page keeps every UV in [0,1].
+    let pad = padding_texels as usize;
+    let (x0, x1) = (x0.min(pad), x1.max(dims[0] as usize - 1 - pad));
+    let (y0, y1) = (y0.min(pad), y1.max(dims[1] as usize - 1 - pad));
+    let cut = |e: &Extents| {
+        let shift = |v: &[(i32, i32)], by: i32| -> Vec<(i32, i32)> {
+            v.iter()
+                .map(|&(a, b)| {
+                    if (a, b) == EMPTY {
+                        EMPTY
+                    } else {
+                        (a - by, b - by)
+                    }
+                })
+                .collect()
+        };
+        Extents {
+            cols: shift(&e.cols[x0..=x1], y0 as i32),
+            rows: shift(&e.rows[y0..=y1], x0 as i32),
+        }
+    };
+    o.affine[0][2] -= x0 as f64;
+    o.affine[1][2] -= y0 as f64;
+    o.width_texels = (x1 - x0 + 1) as i64;
+    o.height_texels = (y1 - y0 + 1) as i64;
+    o.footprint = Some(cut(&f));
+    o.dilated = Some(cut(&d));
     o
 }
 
@@ -441,6 +572,38 @@ mod tests {
                 .fold(0.0, f64::max);
             assert!((d(hull[a], hull[b]) - brute).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn outline_triangles_give_the_extents_and_box_of_all_triangles() {
+        let sets = [
+            crate::atlas::pack::test_charts::mixed_set(40, 7),
+            crate::atlas::pack::test_charts::realistic_set(2),
+        ];
+        let mut skipped = 0usize;
+        let mut total = 0usize;
+        for set in &sets {
+            for (i, owned) in set.iter().enumerate() {
+                let chart = owned.as_pack_chart();
+                let prep = prepare_chart(i, &chart).unwrap();
+                skipped += chart.triangles.len() - prep.outline.len();
+                total += chart.triangles.len();
+                let all = PreparedChart {
+                    outline: (0..chart.triangles.len() as u32).collect(),
+                    ..prep.clone()
+                };
+                for density in [3.0, 17.5, 90.0] {
+                    let a = orientations(&chart, &prep, density, 8, 2, [1024, 1024]);
+                    let b = orientations(&chart, &all, density, 8, 2, [1024, 1024]);
+                    for (x, y) in a.iter().zip(&b) {
+                        assert_eq!(x.affine, y.affine, "chart {i}");
+                        assert_eq!(x.footprint, y.footprint, "chart {i}");
+                        assert_eq!(x.dilated, y.dilated, "chart {i}");
+                    }
+                }
+            }
+        }
+        assert!(skipped > 0 && skipped < total, "{skipped} of {total}");
     }
 
     #[test]

@@ -329,6 +329,95 @@ pub fn rasterize_conservative(mask: &mut Mask, triangles: impl IntoIterator<Item
     }
 }
 
+/// Marks in `mask` every texel whose *centre* lies in a triangle grown by `grow_texels` (each
+/// edge pushed outwards by that distance, clipped to the triangle's bounding box grown by as
+/// much): a superset of the texels the evaluator samples as covered (centre in the closed
+/// triangle), also after the rounding of the written UVs when `grow_texels` exceeds it.
+/// Triangles too thin for a stable edge normal are rasterized conservatively instead
+/// ([`rasterize_conservative`], a superset of the grown triangle's centres).
+///
+/// Returns whether it marked anything (or rasterized a thin triangle conservatively).
+///
+/// Cost: O(rows spanned) per triangle plus the spans written.
+pub fn rasterize_centres(
+    mask: &mut Mask,
+    triangles: impl IntoIterator<Item = [[f64; 2]; 3]>,
+    grow_texels: f64,
+) -> bool {
+    let mut any = false;
+    if mask.width() == 0 || mask.height() == 0 {
+        return any;
+    }
+    let (w, h) = (i64::from(mask.width()), i64::from(mask.height()));
+    let g = grow_texels.max(0.0);
+    for t in triangles {
+        if t.iter().any(|p| {
+            !(p[0].is_finite() && p[1].is_finite() && p[0].abs() < 1e15 && p[1].abs() < 1e15)
+        }) {
+            continue;
+        }
+        let [a, b, c] = t;
+        let xmin = a[0].min(b[0]).min(c[0]);
+        let xmax = a[0].max(b[0]).max(c[0]);
+        let ymin = a[1].min(b[1]).min(c[1]);
+        let ymax = a[1].max(b[1]).max(c[1]);
+        let span = (xmax - xmin).max(ymax - ymin);
+        let area2 = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        if !(area2.abs() > 1e-6 * span * span && span > 1e-9) {
+            rasterize_conservative(mask, [t]);
+            any = true;
+            continue;
+        }
+        // Centres j + 0.5 in the grown box; none: nothing to do (most small triangles).
+        let j0 = ceil_i(ymin - g - 0.5).max(0);
+        let j1 = floor_i(ymax + g - 0.5).min(h - 1);
+        let c0 = ceil_i(xmin - g - 0.5).max(0);
+        let c1 = floor_i(xmax + g - 0.5).min(w - 1);
+        if j0 > j1 || c0 > c1 {
+            continue;
+        }
+        // Counter-clockwise in the sign of area2 > 0: inside is cross(p, q, x) >= 0 per edge.
+        // Each edge is pushed out by g·(|ea| + |eb|) >= g·|normal| (no square root needed).
+        let t = if area2 > 0.0 { t } else { [a, c, b] };
+        let mut lines = [(0.0f64, 0.0f64, 0.0f64); 3];
+        for k in 0..3 {
+            let (p, q) = (t[k], t[(k + 1) % 3]);
+            let (ea, eb) = (-(q[1] - p[1]), q[0] - p[0]);
+            // Stored divided by ea (x bound = -(eb·y + ec) / ea); ea = 0 keeps the raw line.
+            let ec = -(ea * p[0] + eb * p[1]) + g * (ea.abs() + eb.abs());
+            lines[k] = if ea != 0.0 {
+                (ea, eb / ea, ec / ea)
+            } else {
+                (0.0, eb, ec)
+            };
+        }
+        for j in j0..=j1 {
+            let y = j as f64 + 0.5;
+            let (mut xl, mut xr) = (xmin - g, xmax + g);
+            for &(ea, eb, ec) in &lines {
+                let r = eb * y + ec;
+                if ea > 0.0 {
+                    xl = xl.max(-r);
+                } else if ea < 0.0 {
+                    xr = xr.min(-r);
+                } else if r < 0.0 {
+                    xl = f64::INFINITY;
+                }
+            }
+            if xl.is_nan() || xr.is_nan() || xl > xr {
+                continue;
+            }
+            let i0 = ceil_i(xl - 0.5).max(c0);
+            let i1 = floor_i(xr - 0.5).min(c1);
+            if i0 <= i1 {
+                mask.set_span(j as u32, i0 as u32, i1 as u32);
+                any = true;
+            }
+        }
+    }
+    any
+}
+
 /// `floor` as an integer for |x| < 2^62, without a libm call.
 fn floor_i(x: f64) -> i64 {
     let i = x as i64;
@@ -434,6 +523,54 @@ mod tests {
                         .iter()
                         .any(|(di, dj)| touches(&tri, i + di, j + dj));
                         assert!(near, "case {case}: texel ({i},{j}) far from {tri:?}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn centre_raster_holds_every_covered_centre_and_only_near_ones() {
+        let mut state = 0x1234_5678_9abc_def1u64;
+        for case in 0..400 {
+            let mut tri = [[0.0; 2]; 3];
+            for p in &mut tri {
+                let snap = case % 3 == 0;
+                let v = |s: &mut u64| {
+                    let v = 1.0 + 10.0 * xorshift(s);
+                    if snap {
+                        (v * 2.0).round() / 2.0
+                    } else {
+                        v
+                    }
+                };
+                *p = [v(&mut state), v(&mut state)];
+            }
+            let area2 = (tri[1][0] - tri[0][0]) * (tri[2][1] - tri[0][1])
+                - (tri[1][1] - tri[0][1]) * (tri[2][0] - tri[0][0]);
+            if area2 == 0.0 {
+                // Sampled coverage of a degenerate triangle is empty (the evaluator skips it).
+                continue;
+            }
+            let mut mask = Mask::new(14, 14);
+            let marked = rasterize_centres(&mut mask, [tri], 0.01);
+            assert_eq!(marked, mask.count() > 0, "case {case}");
+            let mut conservative = Mask::new(14, 14);
+            rasterize_conservative(&mut conservative, [tri]);
+            for j in 0..14 {
+                for i in 0..14 {
+                    let c = [i as f64 + 0.5, j as f64 + 0.5];
+                    let e = |a: [f64; 2], b: [f64; 2]| {
+                        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+                    };
+                    let (e0, e1, e2) = (e(tri[0], tri[1]), e(tri[1], tri[2]), e(tri[2], tri[0]));
+                    let inside = (e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0)
+                        || (e0 <= 0.0 && e1 <= 0.0 && e2 <= 0.0);
+                    if inside {
+                        assert!(mask.get(i, j), "case {case}: centre ({i},{j}) missed");
+                    }
+                    if mask.get(i, j) {
+                        assert!(conservative.get(i, j), "case {case}: ({i},{j}) far");
                     }
                 }
             }
