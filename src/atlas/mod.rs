@@ -360,7 +360,7 @@ fn place_degenerate(
             }
         }
     }
-    known.sort_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)));
+    known.sort_by_key(|a| (a.0, a.1));
     known.dedup_by(|a, b| (a.0, a.1) == (b.0, b.1));
     // The lowest chart at `k`, or the entry of chart `c` at `k`.
     let first_at = |k: &Key| {
