@@ -123,6 +123,15 @@ pub fn detect_features(mesh: &TriangleMesh, options: &Lscm2002Options) -> Featur
         vertex_feature: vec![false; mesh.num_vertices()],
         vertex_stamp: vec![0; mesh.num_vertices()],
         stamp: 0,
+        max_out: mesh
+            .vertices()
+            .map(|v| {
+                mesh.outgoing_halfedges(v)
+                    .map(|g| out.sharpness_rad[g.index()])
+                    .fold(0.0, f64::max)
+            })
+            .collect(),
+        max_sharp: out.sharpness_rad.iter().copied().fold(0.0, f64::max),
     };
     for &(a, h) in &ranked {
         if a < tau {
@@ -157,6 +166,11 @@ struct Grower<'a> {
     /// new stamp, so a rejected curve needs no clean-up.
     vertex_stamp: Vec<u32>,
     stamp: u32,
+    /// Per vertex, the largest sharpness of its outgoing half-edges (radians): with
+    /// `max_sharp`, the upper bound that prunes `dfs`.
+    max_out: Vec<f64>,
+    /// The largest sharpness of any half-edge (radians).
+    max_sharp: f64,
 }
 
 /// The best string found so far by the depth-first search.
@@ -327,6 +341,25 @@ impl Grower<'_> {
                     continue;
                 }
                 extended = true;
+                // Branch and bound: every string through `g` has a margin of at most `bound`
+                // (each further edge adds at most its sharpness minus the per-edge requirement,
+                // the first one at most `max_out[w]`, and a string may stop by docking at no
+                // cost). `expand` only uses a best margin ≥ 0, and `best` changes only on a
+                // strictly greater margin, so pruning below max(best, 0) never changes the
+                // result (the 1e-9 slack covers rounding of the sums).
+                let s = sum + self.sharp[g.index()];
+                let per_edge = self.tau * (1.0 - STRING_TEST_SLACK);
+                let left = self.max_len - (depth + 1);
+                let bound = s - (depth + 1) as f64 * per_edge
+                    + if left > 0 {
+                        (self.max_out[w.index()] - per_edge).max(0.0)
+                            + (left - 1) as f64 * (self.max_sharp - per_edge).max(0.0)
+                    } else {
+                        0.0
+                    };
+                if bound + 1e-9 * (1.0 + bound.abs()) < best.margin.max(0.0) {
+                    continue;
+                }
                 path.push(w);
                 self.dfs(
                     g,

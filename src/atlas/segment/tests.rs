@@ -920,3 +920,55 @@ fn validation_bounds_the_chart_stretch_by_default() {
         ));
     }
 }
+
+/// A fan around vertex 0 with `n` triangles of `step_deg` degrees each, ring radius 1; closed
+/// (`n` ring vertices, the last triangle back to the first ring vertex) or open.
+fn fan(
+    n: usize,
+    step_deg: f64,
+    closed: bool,
+) -> (crate::atlas::parameterize::ChartMesh, Vec<[f64; 2]>) {
+    let ring = if closed { n } else { n + 1 };
+    let mut uv = vec![[0.0, 0.0]];
+    for k in 0..ring {
+        let a = (k as f64 * step_deg).to_radians();
+        uv.push([a.cos(), a.sin()]);
+    }
+    let triangles: Vec<[u32; 3]> = (0..n)
+        .map(|k| [0, 1 + k as u32, 1 + ((k + 1) % ring) as u32])
+        .collect();
+    let positions_m = uv.iter().map(|p| [p[0], p[1], 0.0]).collect();
+    (
+        crate::atlas::parameterize::ChartMesh {
+            positions_m,
+            triangles,
+        },
+        uv,
+    )
+}
+
+#[test]
+fn vertex_fold_finds_fans_that_wrap_past_a_full_turn() {
+    // Open fans (vertex 0 on the boundary): 4 × 80° = 320° is fine, 5 × 80° = 400° folds.
+    let (cm, uv) = fan(4, 80.0, false);
+    assert_eq!(validate::vertex_fold(&cm, &uv), None);
+    let (cm, uv) = fan(5, 80.0, false);
+    assert!(crate::atlas::parameterize::flipped_faces(&cm, &uv).is_empty());
+    assert_eq!(validate::vertex_fold(&cm, &uv), Some([0, 4]));
+    // Closed fans (vertex 0 interior): 8 × 45° is a disk, 8 × 90° wraps twice.
+    let (cm, uv) = fan(8, 45.0, true);
+    assert_eq!(validate::vertex_fold(&cm, &uv), None);
+    let (cm, uv) = fan(8, 90.0, true);
+    assert!(crate::atlas::parameterize::flipped_faces(&cm, &uv).is_empty());
+    assert!(validate::vertex_fold(&cm, &uv).is_some());
+}
+
+#[test]
+fn near_collinear_overlapping_segments_count_as_crossing() {
+    // Points on y = x / 3 up to rounding: the orientation signs are noise, the segments overlap.
+    let (a, b, c, d) = ([0.0, 0.0], [0.9, 0.3], [0.3, 0.1], [1.2, 0.4]);
+    assert!(validate::segments_intersect(a, b, c, d));
+    assert!(validate::segments_intersect(c, d, a, b));
+    // Clearly apart segments still do not.
+    assert!(!validate::segments_intersect(a, b, [0.3, 0.2], [1.2, 0.5]));
+}

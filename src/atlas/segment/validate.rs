@@ -11,7 +11,10 @@
 //!   count as intersections); the chart is re-grown in two from the faces of the two crossing
 //!   segments (the paper cuts along the border of the overlapped zone; re-growing is the simpler
 //!   alternative issue 4 allows). The orientation signs are computed in `f64`, not with adaptive
-//!   exact arithmetic: a crossing within rounding of a touching is reported as a crossing;
+//!   exact arithmetic: an orientation within 1e-12 of its operands' scale counts as 0, so a
+//!   crossing within rounding of a touching or of a collinear overlap is reported as a crossing
+//!   (before, such a sign was decided by rounding noise and a near-collinear fold of a sliver
+//!   could pass);
 //! - **area distortion**, by one or both of two tests, each split by growing two charts from
 //!   the faces of smallest and largest model area per UV area, as in the paper:
 //!   - the chart's **Sander L2 stretch** above [`ValidateOptions::max_stretch`] (default 1.1);
@@ -28,8 +31,25 @@
 //!   construction: bunny 29 charts at L2 1.027, armadillo 85 at 1.034 (one run, release).
 //!   [`ValidateOptions::paper`] restores the paper's test.
 //!
+//! - **fold at a vertex** ([`vertex_fold`]): a map with no flip and a simple boundary can still
+//!   fold where the UV angles around a vertex wrap past a full turn (≥ 4π at an interior vertex,
+//!   ≥ 2π at a boundary vertex, whose two boundary segments share an endpoint and so are not
+//!   tested against each other); split like an overlap, from two faces of the vertex's fan.
+//!   Together with the tolerant orientation test above (near-collinear boundary segments of a
+//!   folded sliver count as crossing), this closes the miss seen on 2CylinderEngine with the
+//!   paper's options (two same-chart overlaps of a stretched sliver chart); the corpus test
+//!   checks every validated chart for same-chart UV overlaps independently.
+//!
 //! Every part is passed through the disk guarantee again, so the result still satisfies the
 //! segmentation contract (every chart a disk, every face in one chart).
+//!
+//! **Warm start** (`restrict_map`): a part of a split chart is first given the restriction of
+//! its parent's map to its faces; when that restriction passes every test above (no flip, no
+//! boundary crossing, no fold, stretch and area bounds), it is kept and the part is not
+//! flattened. It is not the part's LSCM map (that is usually a little less stretched), but it is
+//! a valid map by the same tests as a fresh one. Parts with zero-area faces are always
+//! flattened. Measured (one run, release): it rarely applies to stretch splits (a part of an
+//! over-stretched map is usually still over-stretched), more often to overlap splits.
 //!
 //! Invariants: terminates — each split makes one more chart, a single triangle never splits, and
 //! the number of splits is bounded by the face count. Deterministic: charts are processed in a
@@ -61,7 +81,9 @@
 //!
 //! Charts of one round are flattened in parallel (rayon) and the results consumed in chart
 //! order; the splits of a chart depend only on that chart, so the result does not depend on the
-//! thread count or on the processing order.
+//! thread count or on the processing order. The merge-back is sequential, but the first try of
+//! the next [`MERGE_BATCH`] charts is flattened in parallel ahead of it and used only when both
+//! charts are unchanged, so its result is that of the sequential pass.
 //!
 //! Units: area ratios are plain ratios (model area per UV area, divided by its minimum over the
 //! chart); UVs in model units, as the parameterizer returns them.
@@ -72,8 +94,11 @@ use std::ops::ControlFlow;
 
 use rayon::prelude::*;
 
+use std::sync::Arc;
+
 use crate::atlas::parameterize::{
-    parameterize_chart, ChartMap, ParameterizeError, ParameterizeMethod, ParameterizeOptions,
+    conformal_energy, flipped_faces, parameterize_chart, ChartMap, ParameterizeError,
+    ParameterizeMethod, ParameterizeOptions,
 };
 use crate::mesh::{FaceId, TriangleMesh, VertexId};
 
@@ -264,7 +289,10 @@ pub fn validate_charts_with_monitor(
 ) -> Result<ValidatedCharts, SegmentError> {
     options.check()?;
     let mut stats: SegmentStats = seg.stats;
-    let mut pending: Vec<Vec<FaceId>> = seg.charts.clone();
+    // Each pending chart carries the map of the chart it was split from, if any: its
+    // restriction is tried before flattening (`restrict_map`, module doc "warm start").
+    let mut pending: Vec<(Vec<FaceId>, Option<Arc<LocatedMap>>)> =
+        seg.charts.iter().map(|c| (c.clone(), None)).collect();
     let mut done: Vec<(Vec<FaceId>, LocatedMap)> = Vec::new();
     let mut unresolved_faces: Vec<(FaceId, ChartDefect)> = Vec::new();
     let mut splits = [0usize; 3];
@@ -275,16 +303,22 @@ pub fn validate_charts_with_monitor(
     // Rounds: flatten every pending chart (in parallel), then, in chart order, keep the valid
     // ones and split the others into the next round's charts.
     while !pending.is_empty() {
-        for faces in &mut pending {
+        for (faces, _) in &mut pending {
             faces.sort_unstable();
         }
         let outcomes: Vec<Attempt> = pending
             .par_iter()
-            .map(|faces| flatten_chart(mesh, faces, options))
+            .map(|(faces, parent)| {
+                parent
+                    .as_deref()
+                    .and_then(|p| restrict_map(mesh, faces, p, options))
+                    .map(|map| Attempt::Mapped { map, defect: None })
+                    .unwrap_or_else(|| flatten_chart(mesh, faces, options))
+            })
             .collect();
         let round = pending.len();
-        let mut next: Vec<Vec<FaceId>> = Vec::new();
-        for (k, (faces, outcome)) in pending.into_iter().zip(outcomes).enumerate() {
+        let mut next: Vec<(Vec<FaceId>, Option<Arc<LocatedMap>>)> = Vec::new();
+        for (k, ((faces, _), outcome)) in pending.into_iter().zip(outcomes).enumerate() {
             if monitor((done.len(), done.len() + round - k + next.len())).is_break() {
                 return Err(SegmentError::Cancelled);
             }
@@ -294,13 +328,17 @@ pub fn validate_charts_with_monitor(
                 Attempt::NotADiskWithoutDegenerate => {
                     if budget_left {
                         degenerate_splits += 1;
-                        next.extend(split_off_degenerate(
-                            mesh,
-                            &faces,
-                            &mut label,
-                            &mut next_label,
-                            &mut stats,
-                        ));
+                        next.extend(
+                            split_off_degenerate(
+                                mesh,
+                                &faces,
+                                &mut label,
+                                &mut next_label,
+                                &mut stats,
+                            )
+                            .into_iter()
+                            .map(|p| (p, None)),
+                        );
                         continue;
                     }
                     (None, None)
@@ -330,9 +368,11 @@ pub fn validate_charts_with_monitor(
             } else {
                 degenerate_splits += 1;
             }
-            for part in enforce_disks(mesh, vec![pa, pb], &mut stats) {
+            let parent = map.map(Arc::new);
+            for mut part in enforce_disks(mesh, vec![pa, pb], &mut stats) {
+                part.sort_unstable();
                 debug_assert!(disk_check(mesh, &part, &|f| part.binary_search(&f).is_ok()).is_ok());
-                next.push(part);
+                next.push((part, parent.clone()));
             }
         }
         pending = next;
@@ -431,6 +471,64 @@ fn flatten_chart(mesh: &TriangleMesh, faces: &[FaceId], options: &ValidateOption
             Err(e) => return Attempt::Failed(e),
         }
     }
+}
+
+/// The parent's map restricted to the part `faces` (ascending) of it, if that is a valid map
+/// of the part (module doc, "warm start"): no zero-area face in the part, no flip, and
+/// [`find_defect`] finds no defect (boundary overlap, fold, stretch or area bound). `None`
+/// means "flatten the part". The restriction is not the part's LSCM map (that is usually a
+/// little less stretched), but it passes the same tests as a fresh map. Pure; called in
+/// parallel. Cost: O(k log k) for k faces, no solve.
+fn restrict_map(
+    mesh: &TriangleMesh,
+    faces: &[FaceId],
+    parent: &LocatedMap,
+    options: &ValidateOptions,
+) -> Option<LocatedMap> {
+    if faces.iter().any(|&f| is_degenerate(mesh, f)) {
+        return None;
+    }
+    let (pmap, pglobal) = parent;
+    let mut by_vertex: Vec<(VertexId, u32)> = pglobal
+        .iter()
+        .enumerate()
+        .map(|(l, &v)| (v, l as u32))
+        .collect();
+    by_vertex.sort_unstable();
+    let parent_local = |v: VertexId| {
+        by_vertex
+            .binary_search_by_key(&v, |&(g, _)| g)
+            .ok()
+            .map(|k| by_vertex[k].1)
+    };
+    let (cm, global) = chart_mesh(mesh, faces);
+    let uv: Vec<[f64; 2]> = global
+        .iter()
+        .map(|&v| parent_local(v).and_then(|l| pmap.uv.get(l as usize).copied()))
+        .collect::<Option<_>>()?;
+    if !flipped_faces(&cm, &uv).is_empty() {
+        return None;
+    }
+    let local_of = |p: u32| -> Option<u32> {
+        let v = *pglobal.get(p as usize)?;
+        global.iter().position(|&g| g == v).map(|l| l as u32)
+    };
+    let pins = match (local_of(pmap.pins[0]), local_of(pmap.pins[1])) {
+        (Some(a), Some(b)) => [a, b],
+        _ => [0, (global.len() as u32).saturating_sub(1)],
+    };
+    let map = ChartMap {
+        conformal_energy: conformal_energy(&cm, &uv),
+        uv,
+        flipped_faces: Vec::new(),
+        method_used: pmap.method_used,
+        iterations: 0,
+        pins,
+        hlscm: None,
+    };
+    find_defect(faces, &cm, &map, options)
+        .is_none()
+        .then_some((map, global))
 }
 
 /// The map of the whole chart `faces` from the map `sub` of its non-dropped faces (local
@@ -723,6 +821,46 @@ fn merge_back(
     };
     let mut merges = 0;
     let mean = mesh.num_faces() / done.len().max(1);
+    // The `MERGE_TRIES` valid neighbours of chart `i` sharing the most edges with it (ties by
+    // index), from the current labels.
+    let neighbours = |i: usize, done: &[(Vec<FaceId>, LocatedMap)], label: &[u32]| {
+        let mut shared: std::collections::BTreeMap<u32, usize> = Default::default();
+        for &f in &done[i].0 {
+            for g in mesh.face_neighbors(f).into_iter().flatten() {
+                let l = label[g.index()];
+                if l != i as u32 && l != u32::MAX && valid[l as usize] {
+                    *shared.entry(l).or_default() += 1;
+                }
+            }
+        }
+        let mut nbrs: Vec<(usize, u32)> = shared.into_iter().map(|(l, n)| (n, l)).collect();
+        nbrs.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.cmp(&y.1)));
+        nbrs.truncate(MERGE_TRIES);
+        nbrs.into_iter()
+            .map(|(_, j)| j as usize)
+            .collect::<Vec<usize>>()
+    };
+    // The map of the union of charts `i` and `j` if it is a disk and valid (pure).
+    let try_union = |union: &[FaceId], i: usize, j: usize, label: &[u32]| {
+        let (ci, cj) = (i as u32, j as u32);
+        let inside = |f: FaceId| {
+            let l = label[f.index()];
+            l == ci || l == cj
+        };
+        if disk_check(mesh, union, &inside).is_err() {
+            return None;
+        }
+        match flatten_chart(mesh, union, options) {
+            Attempt::Mapped { map, defect: None } => Some(map),
+            _ => None,
+        }
+    };
+    let union_of = |i: usize, j: usize, done: &[(Vec<FaceId>, LocatedMap)]| {
+        let mut union = done[j].0.clone();
+        union.extend_from_slice(&done[i].0);
+        union.sort_unstable();
+        union
+    };
     for pass in 0..options.merge_passes {
         let merges_before = merges;
         let mut order: Vec<usize> = (0..done.len())
@@ -730,62 +868,62 @@ fn merge_back(
             .filter(|&i| pass > 0 || done[i].0.len() * 2 < mean)
             .collect();
         order.sort_by_key(|&i| (done[i].0.len(), done[i].0[0]));
-        for i in order {
-            if done[i].0.is_empty() {
-                continue;
-            }
-            let mut shared: std::collections::BTreeMap<u32, usize> = Default::default();
-            for &f in &done[i].0 {
-                for g in mesh.face_neighbors(f).into_iter().flatten() {
-                    let l = label[g.index()];
-                    if l != i as u32 && l != u32::MAX && valid[l as usize] {
-                        *shared.entry(l).or_default() += 1;
-                    }
-                }
-            }
-            let mut nbrs: Vec<(usize, u32)> = shared.into_iter().map(|(l, n)| (n, l)).collect();
-            nbrs.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.cmp(&y.1)));
-            for &(_, j) in nbrs.iter().take(MERGE_TRIES) {
-                let j = j as usize;
-                if failed.contains(&key(i, j, &version)) {
+        // Speculation: the first try of the next `MERGE_BATCH` charts is flattened in parallel
+        // from the state before the batch, and cached by (chart, version) pairs; the sequential
+        // pass below uses a cached result only when both charts are still at those versions (a
+        // chart's faces change only by a merge, which bumps its version), so the result is
+        // exactly that of the sequential pass, whatever the thread count.
+        for batch in order.chunks(MERGE_BATCH) {
+            let specs: Vec<(MergeKey, Vec<FaceId>)> = batch
+                .iter()
+                .filter(|&&i| !done[i].0.is_empty())
+                .filter_map(|&i| {
+                    let j = neighbours(i, done, &label)
+                        .into_iter()
+                        .find(|&j| !failed.contains(&key(i, j, &version)))?;
+                    Some(((i, version[i], j, version[j]), union_of(i, j, done)))
+                })
+                .collect();
+            let label_ref = &label;
+            let mut cache: std::collections::BTreeMap<MergeKey, Option<LocatedMap>> = specs
+                .into_par_iter()
+                .map(|(k, union)| (k, try_union(&union, k.0, k.2, label_ref)))
+                .collect();
+            for &i in batch {
+                if done[i].0.is_empty() {
                     continue;
                 }
-                let known = done.len() - merges;
-                if monitor((known, known)).is_break() {
-                    return Err(SegmentError::Cancelled);
-                }
-                let mut union = done[j].0.clone();
-                union.extend_from_slice(&done[i].0);
-                union.sort_unstable();
-                let (ci, cj) = (i as u32, j as u32);
-                let inside = |f: FaceId| {
-                    let l = label[f.index()];
-                    l == ci || l == cj
-                };
-                let merged = disk_check(mesh, &union, &inside).is_ok()
-                    && match flatten_chart(mesh, &union, options) {
-                        Attempt::Mapped { map, defect: None } => {
-                            // The union takes the slot of the larger chart.
-                            let (keep, gone) = if done[i].0.len() > done[j].0.len() {
-                                (i, j)
-                            } else {
-                                (j, i)
-                            };
-                            for f in &done[gone].0 {
-                                label[f.index()] = keep as u32;
-                            }
-                            done[keep] = (union, map);
-                            done[gone].0.clear();
-                            version[keep] += 1;
-                            true
-                        }
-                        _ => false,
+                for j in neighbours(i, done, &label) {
+                    if failed.contains(&key(i, j, &version)) {
+                        continue;
+                    }
+                    let known = done.len() - merges;
+                    if monitor((known, known)).is_break() {
+                        return Err(SegmentError::Cancelled);
+                    }
+                    let union = union_of(i, j, done);
+                    let result = match cache.remove(&(i, version[i], j, version[j])) {
+                        Some(r) => r,
+                        None => try_union(&union, i, j, &label),
                     };
-                if merged {
-                    merges += 1;
-                    break;
+                    if let Some(map) = result {
+                        // The union takes the slot of the larger chart.
+                        let (keep, gone) = if done[i].0.len() > done[j].0.len() {
+                            (i, j)
+                        } else {
+                            (j, i)
+                        };
+                        for f in &done[gone].0 {
+                            label[f.index()] = keep as u32;
+                        }
+                        done[keep] = (union, map);
+                        done[gone].0.clear();
+                        version[keep] += 1;
+                        merges += 1;
+                        break;
+                    }
+                    failed.insert(key(i, j, &version));
                 }
-                failed.insert(key(i, j, &version));
             }
         }
         if merges == merges_before {
@@ -799,6 +937,13 @@ fn merge_back(
 /// Neighbours tried per chart and pass by `merge_back`.
 const MERGE_TRIES: usize = 2;
 
+/// Charts whose first merge try `merge_back` flattens in parallel ahead of the sequential pass
+/// (a constant, so the speculation does not depend on the thread count; the result never does).
+const MERGE_BATCH: usize = 4;
+
+/// A merge try of `merge_back`: (chart, its version, neighbour, its version).
+type MergeKey = (usize, u32, usize, u32);
+
 /// The first defect of a chart's map, in the order flips, boundary overlap, area ratio.
 fn find_defect(
     faces: &[FaceId],
@@ -811,7 +956,7 @@ fn find_defect(
             count: map.flipped_faces.len(),
         });
     }
-    if let Some([i, j]) = boundary_crossing(cm, &map.uv) {
+    if let Some([i, j]) = boundary_crossing(cm, &map.uv).or_else(|| vertex_fold(cm, &map.uv)) {
         return Some(ChartDefect::BoundaryOverlap {
             faces: [faces[i], faces[j]],
         });
@@ -896,8 +1041,76 @@ fn find_defect(
     })
 }
 
+/// The orientation of `abc`, rounded to 0 when its magnitude is within a (generous) bound of
+/// the `f64` rounding error of the expression (Shewchuk's `ccwerrboundA` ≈ 3.3e-16 of the
+/// permanent, taken 1e-12 here), so a crossing within rounding of a touching or of a collinear
+/// overlap counts as an intersection instead of being decided by the sign of noise: a folded
+/// boundary sliver has almost collinear segments whose signs are noise.
 fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
-    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    let (l, r) = ((b[0] - a[0]) * (c[1] - a[1]), (b[1] - a[1]) * (c[0] - a[0]));
+    let o = l - r;
+    if o.abs() <= 1e-12 * (l.abs() + r.abs()) {
+        0.0
+    } else {
+        o
+    }
+}
+
+/// A vertex around which the map is not locally injective although no face is flipped, as two
+/// chart-local triangles of its fan: an interior vertex whose UV angles sum to more than 3π
+/// (they sum to a multiple of 2π, so ≥ 4π: the fan wraps twice), or a boundary vertex whose
+/// angles sum to at least 2π − 1e-9 (its two boundary edges overlap, or its fan wraps past
+/// itself: a fold that the boundary crossing test cannot see, because the two boundary segments
+/// at the vertex share an endpoint and are skipped). `None` when every vertex is fine. Assumes
+/// no flipped face (angles in (0, π)). Cost: O(k log k).
+pub fn vertex_fold(
+    cm: &crate::atlas::parameterize::ChartMesh,
+    uv: &[[f64; 2]],
+) -> Option<[usize; 2]> {
+    let n = cm.positions_m.len();
+    let mut sum = vec![0.0f64; n];
+    let mut fan: Vec<[usize; 2]> = vec![[usize::MAX, 0]; n];
+    let mut directed: Vec<(u32, u32)> = Vec::with_capacity(3 * cm.triangles.len());
+    for (k, t) in cm.triangles.iter().enumerate() {
+        for s in 0..3 {
+            let (v, a, b) = (t[s], t[(s + 1) % 3], t[(s + 2) % 3]);
+            directed.push((v, a));
+            let (pv, pa, pb) = (
+                uv.get(v as usize)?,
+                uv.get(a as usize)?,
+                uv.get(b as usize)?,
+            );
+            let (e1, e2) = (
+                [pa[0] - pv[0], pa[1] - pv[1]],
+                [pb[0] - pv[0], pb[1] - pv[1]],
+            );
+            let cross = e1[0] * e2[1] - e1[1] * e2[0];
+            let dot = e1[0] * e2[0] + e1[1] * e2[1];
+            sum[v as usize] += cross.atan2(dot).abs();
+            let f = &mut fan[v as usize];
+            f[0] = f[0].min(k);
+            f[1] = f[1].max(k);
+        }
+    }
+    let mut sorted = directed.clone();
+    sorted.sort_unstable();
+    let mut boundary = vec![false; n];
+    for &(a, b) in &directed {
+        if sorted.binary_search(&(b, a)).is_err() {
+            boundary[a as usize] = true;
+        }
+    }
+    let tau = std::f64::consts::TAU;
+    (0..n)
+        .find(|&v| {
+            fan[v][0] != fan[v][1]
+                && if boundary[v] {
+                    sum[v] >= tau - 1e-9
+                } else {
+                    sum[v] > 1.5 * tau
+                }
+        })
+        .map(|v| fan[v])
 }
 
 fn on_segment(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> bool {
@@ -908,7 +1121,7 @@ fn on_segment(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> bool {
 }
 
 /// Segments `ab` and `cd` intersect (touching and collinear overlap included).
-fn segments_intersect(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
+pub(super) fn segments_intersect(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
     let (o1, o2) = (orient(a, b, c), orient(a, b, d));
     let (o3, o4) = (orient(c, d, a), orient(c, d, b));
     if ((o1 > 0.0 && o2 < 0.0) || (o1 < 0.0 && o2 > 0.0))
