@@ -53,6 +53,10 @@ fn unwraps_a_fixture_with_report_and_preview() {
         "256",
         "--padding-texels",
         "4",
+        "--max-stretch",
+        "none",
+        "--merge-passes",
+        "2",
     ]);
     assert!(o.status.success(), "unwrap failed: {}", stderr(&o));
     // The output decodes, keeps the triangles and has the new UV set.
@@ -68,6 +72,12 @@ fn unwraps_a_fixture_with_report_and_preview() {
     assert_eq!(json["input"]["triangles"], 12);
     assert_eq!(json["options"]["resolution"], 256);
     assert_eq!(json["options"]["padding_texels"], 4);
+    assert_eq!(
+        json["options"].get("max_stretch"),
+        Some(&serde_json::Value::Null),
+        "an explicit null: no stretch bound"
+    );
+    assert_eq!(json["options"]["merge_passes"], 2);
     assert_eq!(json["quality"]["flipped"], 0);
     assert_eq!(json["pages"][0]["primitives"][0]["triangles"], 12);
     let options_errors = violations("options.schema.json", &json["options"]);
@@ -112,6 +122,8 @@ fn bad_options_and_files_fail_with_a_clear_message() {
         (vec!["--resolution", "big"], "not a resolution"),
         (vec!["--solver", "magic"], "not a solver"),
         (vec!["--texels-per-unit=-3"], "texels_per_unit"),
+        (vec!["--max-stretch", "0.5"], "max_stretch"),
+        (vec!["--max-stretch", "loose"], "not a stretch bound"),
     ] {
         let box_glb = fixture("Box.glb");
         let mut all: Vec<String> = ["unwrap", s(&box_glb), "-o", s(&out)]

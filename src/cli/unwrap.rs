@@ -63,7 +63,7 @@ pub struct OptionFlags {
     /// Largest Sander L2 stretch of a chart before validation splits it (>= 1), or `none` for
     /// no bound. Default 1.1.
     #[arg(long, value_parser = parse_max_stretch)]
-    pub max_stretch: Option<Option<f64>>,
+    pub max_stretch: Option<StretchBound>,
     /// The LSCM paper's area test: largest per-chart spread of face area ratios before a chart
     /// is split (>= 1, the paper uses 2). Default: off.
     #[arg(long)]
@@ -95,7 +95,7 @@ impl OptionFlags {
             texels_per_unit: self.texels_per_unit,
             rotations: self.rotations,
             max_charts: self.max_charts,
-            max_stretch: self.max_stretch,
+            max_stretch: self.max_stretch.map(|b| b.0),
             max_area_ratio: self.max_area_ratio,
             merge_passes: self.merge_passes,
             feature_fraction: self.feature_fraction,
@@ -118,12 +118,17 @@ fn parse_resolution(s: &str) -> Result<ResolutionJson, String> {
     }
 }
 
-fn parse_max_stretch(s: &str) -> Result<Option<f64>, String> {
+/// `--max-stretch`: a bound, or `none` for no bound (a newtype: clap reads a bare
+/// `Option<Option<_>>` as "flag with an optional value").
+#[derive(Debug, Clone, Copy)]
+pub struct StretchBound(pub Option<f64>);
+
+fn parse_max_stretch(s: &str) -> Result<StretchBound, String> {
     if s == "none" {
-        return Ok(None);
+        return Ok(StretchBound(None));
     }
     s.parse::<f64>()
-        .map(Some)
+        .map(|b| StretchBound(Some(b)))
         .map_err(|_| format!("`{s}` is not a stretch bound; use e.g. 1.1, or none"))
 }
 
