@@ -2,7 +2,8 @@
 //! the bunny-sized and glTF-feature assets go upload → poll → result through the real server and
 //! the real pipeline; each result decodes with every triangle, its report validates against
 //! `proto/report.schema.json`, and (when `TEXATLAS_GLTF_VALIDATOR` and `TEXATLAS_EVAL_DIR` are
-//! set) the Khronos glTF-Validator reports 0 errors.
+//! set) the Khronos glTF-Validator reports 0 errors and the independent evaluator
+//! (`atlas_eval.py --input`) finds the round trip ok, 0 flips, 0 overlaps, 0 padding violations.
 mod http_common;
 
 use std::path::PathBuf;
@@ -83,12 +84,34 @@ async fn corpus_assets_through_the_service() {
             std::fs::write(&file, &glb).unwrap();
             let v = Command::new("node")
                 .env("NODE_PATH", node_modules)
-                .arg(PathBuf::from(eval).join("gltf_validate.js"))
+                .arg(PathBuf::from(&eval).join("gltf_validate.js"))
                 .arg(&file)
                 .output()
                 .expect("run node");
             let r: Value = serde_json::from_slice(&v.stdout).expect("validator JSON");
             assert_eq!(r["errors"], 0, "{name}: validator {r}");
+            // The independent evaluator's round trip: every input attribute and position comes
+            // back per corner, and the atlas has no flip, overlap or padding violation.
+            let k = report["uv_set_per_primitive"][0]
+                .as_u64()
+                .expect("a UV set");
+            let e = Command::new("python3")
+                .arg(PathBuf::from(&eval).join("atlas_eval.py"))
+                .arg(&file)
+                .arg("--input")
+                .arg(&path)
+                .args(["--uv", &k.to_string(), "--json"])
+                .output()
+                .expect("run python3");
+            let e: Value = serde_json::from_slice(&e.stdout).expect("evaluator JSON");
+            assert_eq!(
+                e["roundtrip"]["ok"], true,
+                "{name}: round trip {}",
+                e["roundtrip"]
+            );
+            assert_eq!(e["flipped"], 0, "{name}");
+            assert_eq!(e["overlap"]["pairs"], 0, "{name}");
+            assert_eq!(e["padding"]["violation_texels"], 0, "{name}");
         }
         println!("{name}: {} triangles, succeeded", done["triangles"]);
     }
