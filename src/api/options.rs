@@ -85,7 +85,7 @@ pub struct OptionsJson {
     /// Fixed texel density in texels per model unit; unset fits everything on one page.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub texels_per_unit: Option<f64>,
-    /// Rotations tried per chart when packing, 1..=360, default 16.
+    /// Rotations tried per chart when packing, 1..=64, default 16.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rotations: Option<u32>,
     /// Upper bound on the number of charts after segmentation (best effort); unset: no bound.
@@ -293,6 +293,8 @@ mod tests {
             (r#"{"padding_texels":600}"#, "padding_texels"),
             (r#"{"resolution":0}"#, "width_texels"),
             (r#"{"rotations":0}"#, "rotations"),
+            (r#"{"rotations":65}"#, "rotations"),
+            (r#"{"resolution":16385}"#, "width_texels"),
             (r#"{"texels_per_unit":-1}"#, "texels_per_unit"),
             (r#"{"max_area_ratio":0.5}"#, "max_area_ratio"),
             (r#"{"max_stretch":0.9}"#, "max_stretch"),

@@ -23,8 +23,8 @@ pub struct AtlasOptions {
     pub pack: PackOptions,
 }
 
-/// Largest page side accepted, in texels (a 16384² page is 256 M texels of packer state).
-pub const MAX_PAGE_SIDE_TEXELS: u32 = 16_384;
+/// Largest page side accepted, in texels: the packer's own bound.
+pub const MAX_PAGE_SIDE_TEXELS: u32 = super::pack::MAX_PAGE_TEXELS;
 
 impl AtlasOptions {
     /// Rejects meaningless values (module doc). Called by [`super::generate`].
@@ -44,7 +44,7 @@ impl AtlasOptions {
             }
         }
         let min_side = p.width_texels.min(p.height_texels);
-        if p.padding_texels.saturating_mul(2) >= min_side {
+        if u64::from(p.padding_texels) * 2 + 1 > u64::from(min_side) {
             return Err(invalid(
                 "padding_texels",
                 format!(
@@ -52,16 +52,17 @@ impl AtlasOptions {
                     p.padding_texels,
                     p.width_texels,
                     p.height_texels,
-                    min_side / 2
+                    min_side.div_ceil(2)
                 ),
             ));
         }
-        if p.rotations == 0 || p.rotations > 360 {
+        if p.rotations == 0 || p.rotations > super::pack::MAX_ROTATIONS {
             return Err(invalid(
                 "rotations",
                 format!(
-                    "{} is outside 1..=360; use 1 (no rotation) to 16",
-                    p.rotations
+                    "{} is outside 1..={}; use 1 (no rotation) to 16",
+                    p.rotations,
+                    super::pack::MAX_ROTATIONS
                 ),
             ));
         }

@@ -54,7 +54,7 @@ pub struct OptionFlags {
     /// the largest density that fits everything on one page.
     #[arg(long)]
     pub texels_per_unit: Option<f64>,
-    /// Rotations tried per chart when packing (1..=360). Default 16.
+    /// Rotations tried per chart when packing (1..=64). Default 16.
     #[arg(long)]
     pub rotations: Option<u32>,
     /// Upper bound on the number of charts after segmentation (best effort). Default: none.
