@@ -624,5 +624,22 @@ fn measure_speed() {
             &test_uvs(&mesh),
             1024,
         );
+        if mesh.num_faces() <= 100_000 {
+            // The atlas the pipeline really makes (default options), as in `texatlas unwrap`.
+            let atlas = texatlas::atlas::generate(
+                &mesh,
+                &texatlas::atlas::AtlasOptions::default(),
+                &mut texatlas::atlas::NoProgress,
+            )
+            .expect("generate");
+            for _ in 0..3 {
+                time_measure(
+                    &format!("{name}, atlas::generate's atlas"),
+                    &mesh,
+                    &atlas.corner_uvs,
+                    1024,
+                );
+            }
+        }
     }
 }

@@ -490,29 +490,46 @@ pub fn measure_atlas(input: &MeasureInput<'_>) -> AtlasReport {
         }
     }
 
-    // Stretch, distortion, density, per-chart values.
-    let st = stretch::stretch(
-        mesh,
-        input.corner_uvs,
-        &geo,
-        &con.chart_of_face,
-        con.num_charts,
-        f64::from(input.width_texels) * f64::from(input.height_texels),
+    // Stretch, distortion, density, per-chart values; raster metrics; exact overlaps. The three
+    // are independent pure functions of the same inputs, run concurrently.
+    let ((st, ras), exact) = rayon::join(
+        || {
+            rayon::join(
+                || {
+                    stretch::stretch(
+                        mesh,
+                        input.corner_uvs,
+                        &geo,
+                        &con.chart_of_face,
+                        con.num_charts,
+                        f64::from(input.width_texels) * f64::from(input.height_texels),
+                    )
+                },
+                || {
+                    raster::rasterize_pages(
+                        input.corner_uvs,
+                        input.face_page,
+                        input.num_pages,
+                        [input.width_texels, input.height_texels],
+                        input.padding_texels,
+                        &con.chart_of_face,
+                    )
+                },
+            )
+        },
+        || {
+            overlap::exact_overlaps(
+                input.corner_uvs,
+                input.face_page,
+                input.num_pages,
+                &con.chart_of_face,
+            )
+        },
     );
     report.stretch = st.stretch;
     report.angle_distortion = st.angle;
     report.area_distortion = st.area;
     report.texel_density = st.density;
-
-    // Raster metrics and exact overlaps.
-    let ras = raster::rasterize_pages(
-        input.corner_uvs,
-        input.face_page,
-        input.num_pages,
-        [input.width_texels, input.height_texels],
-        input.padding_texels,
-        &con.chart_of_face,
-    );
     let page_texels = pages * f64::from(input.width_texels) * f64::from(input.height_texels);
     report.texel_utilization = ras.sampled.covered_texels as f64 / page_texels;
     report.overlap.sampled = ras.sampled;
@@ -520,12 +537,7 @@ pub fn measure_atlas(input: &MeasureInput<'_>) -> AtlasReport {
         padding_texels: input.padding_texels,
         violation_texels: ras.padding_violation_texels,
     };
-    report.overlap.exact = overlap::exact_overlaps(
-        input.corner_uvs,
-        input.face_page,
-        input.num_pages,
-        &con.chart_of_face,
-    );
+    report.overlap.exact = exact;
 
     // Per chart and per page.
     let mut per_chart: Vec<ChartReport> = Vec::with_capacity(con.num_charts);

@@ -19,7 +19,12 @@
 //!
 //! Units: texels. Cost: `O(covered texels + faces + W·H·padding)` per page; 8 bytes per texel
 //! (count + label), plus 12 bytes per multiply covered (texel, face) sample.
+use rayon::prelude::*;
+
 use super::{SampledOverlap, SAMPLED_PAIR_CANDIDATES_MAX};
+
+/// Rows per band of the parallel coverage pass.
+const BAND_ROWS: usize = 32;
 
 /// Fixed-point subdivisions per texel (the evaluator's `S`).
 const SUBPIXEL: i64 = 256;
@@ -39,13 +44,32 @@ struct FixedTriangle {
     y: [i64; 3],
 }
 
-/// Calls `run(j, lo, hi)` for every row `j` whose texel centres `lo..=hi` the triangle covers.
-fn for_each_run(t: &FixedTriangle, s: i64, [w, h]: [i64; 2], mut run: impl FnMut(i64, i64, i64)) {
+/// Rows `j0..=j1` whose sample `y = j·S + S/2` lies in the triangle's `[ymin, ymax]`, clipped
+/// to the page (`j1 < j0` when none).
+fn row_span(t: &FixedTriangle, s: i64, h: i64) -> (i64, i64) {
     let half = s / 2;
     let (ymin, ymax) = (t.y.iter().min().unwrap(), t.y.iter().max().unwrap());
-    // Rows whose sample y = j·S + S/2 lies in [ymin, ymax].
     let j0 = (-((-(ymin - half)).div_euclid(s))).max(0);
     let j1 = (ymax - half).div_euclid(s).min(h - 1);
+    (j0, j1)
+}
+
+/// Calls `run(j, lo, hi)` for every row `j` whose texel centres `lo..=hi` the triangle covers.
+fn for_each_run(t: &FixedTriangle, s: i64, [w, h]: [i64; 2], run: impl FnMut(i64, i64, i64)) {
+    for_each_run_in_rows(t, s, [w, h], (0, h - 1), run);
+}
+
+/// [`for_each_run`] restricted to the rows `rows.0..=rows.1`.
+fn for_each_run_in_rows(
+    t: &FixedTriangle,
+    s: i64,
+    [w, h]: [i64; 2],
+    rows: (i64, i64),
+    mut run: impl FnMut(i64, i64, i64),
+) {
+    let half = s / 2;
+    let (j0, j1) = row_span(t, s, h);
+    let (j0, j1) = (j0.max(rows.0), j1.min(rows.1));
     let edges: [(i64, i64, i64, i64); 3] = std::array::from_fn(|e| {
         let (a, b) = (e, (e + 1) % 3);
         (t.x[a], t.y[a], t.x[b] - t.x[a], t.y[b] - t.y[a])
@@ -105,7 +129,7 @@ pub(super) fn rasterize_pages(
             .iter()
             .filter_map(|&f| {
                 let uv = &corner_uvs[f as usize];
-                let c: Vec<f64> = uv.iter().flatten().map(|&x| f64::from(x)).collect();
+                let c: [f64; 6] = std::array::from_fn(|i| f64::from(uv[i / 2][i % 2]));
                 if !c.iter().all(|x| x.is_finite()) {
                     return None;
                 }
@@ -145,36 +169,67 @@ pub(super) fn rasterize_pages(
             tris.push(FixedTriangle { face: f, x, y });
         }
 
-        // Pass 1: coverage count and chart label (-1 empty, -2 several charts).
-        cov.fill(0);
-        label.fill(-1);
-        for t in &tris {
-            let chart = chart_of_face[t.face as usize] as i32;
-            for_each_run(t, s, [w, h], |j, lo, hi| {
-                let row = (j * w) as usize;
-                for i in lo as usize..=hi as usize {
-                    let k = row + i;
-                    if cov[k] == 0 {
-                        label[k] = chart;
-                    } else if label[k] != chart {
-                        label[k] = -2;
-                    }
-                    cov[k] += 1;
-                }
-            });
-        }
-        let (mut covered, mut multi) = (0u64, 0u64);
-        for (&c, &l) in cov.iter().zip(&label) {
-            covered += u64::from(c >= 1);
-            if c >= 2 {
-                multi += 1;
-                if l == -2 {
-                    out.sampled.texels_cross_chart += 1;
-                } else {
-                    out.sampled.texels_same_chart += 1;
+        // Pass 1: coverage count and chart label (-1 empty, -2 several charts), in bands of
+        // `BAND_ROWS` rows rasterised in parallel. A texel's count and label depend only on the
+        // triangles covering it, visited in `tris` order within its band, so the result is the
+        // same for any banding and thread count.
+        let band_rows = BAND_ROWS as i64;
+        let num_bands = ((h + band_rows - 1) / band_rows) as usize;
+        let mut tris_of_band: Vec<Vec<u32>> = vec![Vec::new(); num_bands];
+        for (ti, t) in tris.iter().enumerate() {
+            let (j0, j1) = row_span(t, s, h);
+            if j1 >= j0 {
+                for band in (j0 / band_rows) as usize..=(j1 / band_rows) as usize {
+                    tris_of_band[band].push(ti as u32);
                 }
             }
         }
+        let band_texels = BAND_ROWS * w as usize;
+        let band_counts: Vec<[u64; 4]> = cov
+            .par_chunks_mut(band_texels)
+            .zip(label.par_chunks_mut(band_texels))
+            .zip(tris_of_band.par_iter())
+            .enumerate()
+            .map(|(band, ((cov, label), band_tris))| {
+                cov.fill(0);
+                label.fill(-1);
+                let first_row = band as i64 * band_rows;
+                let rows = (first_row, first_row + band_rows - 1);
+                for &ti in band_tris {
+                    let t = &tris[ti as usize];
+                    let chart = chart_of_face[t.face as usize] as i32;
+                    for_each_run_in_rows(t, s, [w, h], rows, |j, lo, hi| {
+                        let row = ((j - first_row) * w) as usize;
+                        for i in lo as usize..=hi as usize {
+                            let k = row + i;
+                            if cov[k] == 0 {
+                                label[k] = chart;
+                            } else if label[k] != chart {
+                                label[k] = -2;
+                            }
+                            cov[k] += 1;
+                        }
+                    });
+                }
+                // [covered, multiply covered, of which cross-chart, of which same-chart]
+                let mut n = [0u64; 4];
+                for (&c, &l) in cov.iter().zip(label.iter()) {
+                    n[0] += u64::from(c >= 1);
+                    if c >= 2 {
+                        n[1] += 1;
+                        n[2] += u64::from(l == -2);
+                        n[3] += u64::from(l != -2);
+                    }
+                }
+                n
+            })
+            .collect();
+        let n = band_counts.iter().fold([0u64; 4], |a, b| {
+            [a[0] + b[0], a[1] + b[1], a[2] + b[2], a[3] + b[3]]
+        });
+        let (covered, multi) = (n[0], n[1]);
+        out.sampled.texels_cross_chart += n[2];
+        out.sampled.texels_same_chart += n[3];
         out.sampled.covered_texels += covered;
         out.sampled.overlapping_texels += multi;
         out.covered_per_page.push(covered);
@@ -276,38 +331,43 @@ pub(super) fn padding_violations(label: &[i32], [w, h]: [usize; 2], p: usize) ->
     if p == 0 || !label.iter().any(|&l| l >= 0) {
         return 0;
     }
-    // Row pass: min and max chart label over [i-p, i+p] (labels < 0 ignored).
+    // Row pass: min and max chart label over [i-p, i+p] (labels < 0 ignored), rows in parallel.
     let mut rmin = vec![i32::MAX; w * h];
     let mut rmax = vec![-1i32; w * h];
-    for j in 0..h {
-        let row = &label[j * w..(j + 1) * w];
-        if !row.iter().any(|&l| l >= 0) {
-            continue;
-        }
-        for i in 0..w {
-            let (mut mn, mut mx) = (i32::MAX, -1);
-            for &l in &row[i.saturating_sub(p)..(i + p + 1).min(w)] {
-                if l >= 0 {
-                    mn = mn.min(l);
-                    mx = mx.max(l);
+    rmin.par_chunks_mut(w)
+        .zip(rmax.par_chunks_mut(w))
+        .zip(label.par_chunks(w))
+        .for_each(|((rmin, rmax), row)| {
+            if !row.iter().any(|&l| l >= 0) {
+                return;
+            }
+            for i in 0..w {
+                let (mut mn, mut mx) = (i32::MAX, -1);
+                for &l in &row[i.saturating_sub(p)..(i + p + 1).min(w)] {
+                    if l >= 0 {
+                        mn = mn.min(l);
+                        mx = mx.max(l);
+                    }
                 }
+                rmin[i] = mn;
+                rmax[i] = mx;
             }
-            rmin[j * w + i] = mn;
-            rmax[j * w + i] = mx;
-        }
-    }
-    // Column pass, only at covered single-chart texels.
-    let mut violations = 0u64;
-    for j in 0..h {
-        for i in 0..w {
-            let me = label[j * w + i];
-            if me < 0 {
-                continue;
+        });
+    // Column pass, only at covered single-chart texels; integer counts summed per row.
+    label
+        .par_chunks(w)
+        .enumerate()
+        .map(|(j, row)| {
+            let mut violations = 0u64;
+            for (i, &me) in row.iter().enumerate() {
+                if me < 0 {
+                    continue;
+                }
+                let bad = (j.saturating_sub(p)..(j + p + 1).min(h))
+                    .any(|jj| rmin[jj * w + i] < me || rmax[jj * w + i] > me);
+                violations += u64::from(bad);
             }
-            let bad = (j.saturating_sub(p)..(j + p + 1).min(h))
-                .any(|jj| rmin[jj * w + i] < me || rmax[jj * w + i] > me);
-            violations += u64::from(bad);
-        }
-    }
-    violations
+            violations
+        })
+        .sum()
 }
