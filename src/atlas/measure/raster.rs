@@ -179,8 +179,9 @@ pub(super) fn rasterize_pages(
         for (ti, t) in tris.iter().enumerate() {
             let (j0, j1) = row_span(t, s, h);
             if j1 >= j0 {
-                for band in (j0 / band_rows) as usize..=(j1 / band_rows) as usize {
-                    tris_of_band[band].push(ti as u32);
+                let bands = (j0 / band_rows) as usize..=(j1 / band_rows) as usize;
+                for band_tris in &mut tris_of_band[bands] {
+                    band_tris.push(ti as u32);
                 }
             }
         }
