@@ -5,9 +5,9 @@
 //! validator (0 errors). Skipped (with a message) when `TEXATLAS_CORPUS_DIR` is unset.
 //! `TEXATLAS_CORPUS_ONLY=substr` restricts the run to matching file names.
 mod gltf_common;
+mod tools_common;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use texatlas::gltf_io::{decode, encode, DecodeLimits, EncodeOptions, Resources, UvTarget};
 
@@ -22,12 +22,6 @@ fn test_uvs(faces: usize) -> Vec<[[f32; 2]; 3]> {
             [[x, y], [x + 0.9 * cell, y], [x, y + 0.9 * cell]]
         })
         .collect()
-}
-
-fn eval_dir() -> PathBuf {
-    std::env::var_os("TEXATLAS_EVAL_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("../shared/eval"))
 }
 
 #[test]
@@ -92,20 +86,19 @@ fn check_file(input: &Path, output: &Path, options: &EncodeOptions) -> Result<St
         )
     })?;
     std::fs::write(output, &encoded.bytes).map_err(|e| e.to_string())?;
-    let eval = Command::new("python3")
-        .arg(eval_dir().join("atlas_eval.py"))
-        .arg(output)
-        .args(["--input"])
-        .arg(input)
-        .args(["--uv", &k.to_string(), "--json", "--resolution", "64"])
-        .output()
-        .map_err(|e| format!("cannot run python3: {e}"))?;
-    let report: serde_json::Value = serde_json::from_slice(&eval.stdout).map_err(|e| {
-        format!(
-            "evaluator output is not JSON ({e}); stderr: {}",
-            String::from_utf8_lossy(&eval.stderr)
-        )
-    })?;
+    let k_arg = k.to_string();
+    let report = tools_common::evaluate(
+        &tools_common::eval_dir(),
+        output,
+        &[
+            "--uv",
+            &k_arg,
+            "--resolution",
+            "64",
+            "--input",
+            &input.to_string_lossy(),
+        ],
+    )?;
     if report.pointer("/roundtrip/ok") != Some(&serde_json::Value::Bool(true)) {
         return Err(format!(
             "roundtrip not ok: {}",
@@ -113,39 +106,10 @@ fn check_file(input: &Path, output: &Path, options: &EncodeOptions) -> Result<St
         ));
     }
     let mut line = format!("{faces} triangles, TEXCOORD_{k}, roundtrip ok");
-    if let Some(warnings) = validate(output)? {
+    if let Some(warnings) = tools_common::validate(output)? {
         line.push_str(&format!(", validator 0 errors / {warnings} warnings"));
     }
     Ok(line)
-}
-
-/// Runs the Khronos validator when `TEXATLAS_GLTF_VALIDATOR` is set: `Ok(Some(warnings))` on 0
-/// errors, `Ok(None)` when not configured.
-fn validate(file: &Path) -> Result<Option<u64>, String> {
-    let Some(node_modules) = std::env::var_os("TEXATLAS_GLTF_VALIDATOR") else {
-        return Ok(None);
-    };
-    let v = Command::new("node")
-        .env("NODE_PATH", node_modules)
-        .arg(eval_dir().join("gltf_validate.js"))
-        .arg(file)
-        .output()
-        .map_err(|e| format!("cannot run node: {e}"))?;
-    let report: serde_json::Value = serde_json::from_slice(&v.stdout).map_err(|e| {
-        format!(
-            "validator output is not JSON ({e}); stderr: {}",
-            String::from_utf8_lossy(&v.stderr)
-        )
-    })?;
-    if report.get("errors").and_then(serde_json::Value::as_u64) != Some(0) {
-        return Err(format!("validator: {report}"));
-    }
-    Ok(Some(
-        report
-            .get("warnings")
-            .and_then(serde_json::Value::as_u64)
-            .unwrap_or(0),
-    ))
 }
 
 /// The generated kitchen-sink asset (what the corpus lacks: quantized, sparse, interleaved,
@@ -166,7 +130,7 @@ fn generated_asset_passes_the_validator_and_evaluator() {
         uv_target: UvTarget::Replace(0),
         ..EncodeOptions::default()
     };
-    let result = validate(&input)
+    let result = tools_common::validate(&input)
         .and_then(|_| check_file(&input, &dir.join("kitchen_sink_out.glb"), &options));
     let _ = std::fs::remove_dir_all(&dir);
     match result {

@@ -5,9 +5,9 @@
 //! set) the Khronos glTF-Validator reports 0 errors and the independent evaluator
 //! (`atlas_eval.py --input`) finds the round trip ok, 0 flips, 0 overlaps, 0 padding violations.
 mod http_common;
+mod tools_common;
 
 use std::path::PathBuf;
-use std::process::Command;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -76,34 +76,27 @@ async fn corpus_assets_through_the_service() {
             .unwrap();
         assert_schema("Report", &report);
         assert_eq!(report["quality"]["flipped"], 0, "{name}");
-        if let (Some(node_modules), Some(eval)) = (
+        if let (Some(_), Some(eval)) = (
             std::env::var_os("TEXATLAS_GLTF_VALIDATOR"),
-            std::env::var_os("TEXATLAS_EVAL_DIR"),
+            tools_common::eval_dir_from_env(),
         ) {
             let file = out.path().join(name);
             std::fs::write(&file, &glb).unwrap();
-            let v = Command::new("node")
-                .env("NODE_PATH", node_modules)
-                .arg(PathBuf::from(&eval).join("gltf_validate.js"))
-                .arg(&file)
-                .output()
-                .expect("run node");
-            let r: Value = serde_json::from_slice(&v.stdout).expect("validator JSON");
-            assert_eq!(r["errors"], 0, "{name}: validator {r}");
+            if let Err(why) = tools_common::validate(&file) {
+                panic!("{name}: {why}");
+            }
             // The independent evaluator's round trip: every input attribute and position comes
             // back per corner, and the atlas has no flip, overlap or padding violation.
             let k = report["uv_set_per_primitive"][0]
                 .as_u64()
-                .expect("a UV set");
-            let e = Command::new("python3")
-                .arg(PathBuf::from(&eval).join("atlas_eval.py"))
-                .arg(&file)
-                .arg("--input")
-                .arg(&path)
-                .args(["--uv", &k.to_string(), "--json"])
-                .output()
-                .expect("run python3");
-            let e: Value = serde_json::from_slice(&e.stdout).expect("evaluator JSON");
+                .expect("a UV set")
+                .to_string();
+            let e = tools_common::evaluate(
+                &eval,
+                &file,
+                &["--input", &path.to_string_lossy(), "--uv", &k],
+            )
+            .unwrap_or_else(|why| panic!("{name}: {why}"));
             assert_eq!(
                 e["roundtrip"]["ok"], true,
                 "{name}: round trip {}",

@@ -17,9 +17,9 @@
 //! `TEXATLAS_CORPUS_DIR` also set, every corpus `.glb` is compared too, except the 1M-triangle
 //! one, which is only timed (the evaluator needs ~12 s and 1.7 GB on it); a table is printed.
 mod gltf_common;
+mod tools_common;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::time::Instant;
 
 use serde_json::{json, Value};
@@ -141,12 +141,6 @@ fn glb_of(parts: &[MeshInput]) -> Vec<u8> {
     }
     b.push("scenes", json!({ "nodes": nodes }));
     b.glb()
-}
-
-fn eval_dir() -> Option<PathBuf> {
-    std::env::var_os("TEXATLAS_EVAL_DIR")
-        .filter(|d| !d.is_empty())
-        .map(PathBuf::from)
 }
 
 /// One comparison: our value, the evaluator's (by JSON pointer).
@@ -381,20 +375,19 @@ fn check_asset(
         .ok_or_else(|| format!("UV sets differ: {:?}", encoded.uv_set_per_primitive))?;
     let path = dir.join(format!("{name}.out.glb"));
     std::fs::write(&path, &encoded.bytes).map_err(|e| e.to_string())?;
-    let out = Command::new("python3")
-        .arg(evaluator.join("atlas_eval.py"))
-        .arg(&path)
-        .args(["--resolution", &resolution.to_string()])
-        .args(["--padding", &padding.to_string()])
-        .args(["--uv", &k.to_string(), "--json"])
-        .output()
-        .map_err(|e| format!("cannot run python3: {e}"))?;
-    let eval: Value = serde_json::from_slice(&out.stdout).map_err(|e| {
-        format!(
-            "evaluator output is not JSON ({e}); stderr: {}",
-            String::from_utf8_lossy(&out.stderr)
-        )
-    })?;
+    let (resolution, padding, k) = (resolution.to_string(), padding.to_string(), k.to_string());
+    let eval = tools_common::evaluate(
+        evaluator,
+        &path,
+        &[
+            "--resolution",
+            &resolution,
+            "--padding",
+            &padding,
+            "--uv",
+            &k,
+        ],
+    )?;
     let disagreements = compare(&ours, &eval);
     let num = |p: &str| eval.pointer(p).and_then(Value::as_f64).unwrap_or(f64::NAN);
     line.push_str(&format!(
@@ -453,7 +446,7 @@ fn run_all(tag: &str, assets: Vec<(String, Vec<u8>, u32, bool)>, evaluator: &Pat
 
 #[test]
 fn measure_agrees_with_the_evaluator_on_fixtures_and_generated_meshes() {
-    let Some(evaluator) = eval_dir() else {
+    let Some(evaluator) = tools_common::eval_dir_from_env() else {
         println!("measure_eval_agreement: skipped (TEXATLAS_EVAL_DIR is unset)");
         return;
     };
@@ -495,8 +488,10 @@ fn measure_agrees_with_the_evaluator_on_fixtures_and_generated_meshes() {
 
 #[test]
 fn measure_agrees_with_the_evaluator_on_the_corpus() {
-    let (Some(evaluator), Some(corpus)) = (eval_dir(), std::env::var_os("TEXATLAS_CORPUS_DIR"))
-    else {
+    let (Some(evaluator), Some(corpus)) = (
+        tools_common::eval_dir_from_env(),
+        std::env::var_os("TEXATLAS_CORPUS_DIR"),
+    ) else {
         println!("measure_eval_agreement corpus: skipped (TEXATLAS_EVAL_DIR or TEXATLAS_CORPUS_DIR unset)");
         return;
     };

@@ -9,14 +9,10 @@
 //! Skipped (with a message) when `TEXATLAS_CORPUS_DIR` is unset. The 1M-triangle file is left out
 //! unless `TEXATLAS_CORPUS_ALL` is set (`texatlas bench` covers it).
 //! `TEXATLAS_CORPUS_ONLY=substr` restricts the run to matching names.
+mod tools_common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn eval_dir() -> PathBuf {
-    std::env::var_os("TEXATLAS_EVAL_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("../shared/eval"))
-}
 
 #[test]
 fn every_corpus_file_unwraps_and_passes_the_evaluator() {
@@ -98,28 +94,22 @@ fn check(input: &Path, out_dir: &Path, name: &str) -> Result<(), String> {
             "UV sets differ between primitives ({sets:?}); the evaluator reads one"
         ));
     }
-    let eval = Command::new("python3")
-        .arg(eval_dir().join("atlas_eval.py"))
-        .arg(&out)
-        .arg("--input")
-        .arg(input)
-        .args([
+    let k_arg = k.to_string();
+    let input_arg = input.to_string_lossy();
+    let e = tools_common::evaluate(
+        &tools_common::eval_dir(),
+        &out,
+        &[
+            "--input",
+            &input_arg,
             "--uv",
-            &k.to_string(),
+            &k_arg,
             "--resolution",
             "1024",
             "--padding",
             "2",
-            "--json",
-        ])
-        .output()
-        .map_err(|e| format!("cannot run python3: {e}"))?;
-    let e: serde_json::Value = serde_json::from_slice(&eval.stdout).map_err(|err| {
-        format!(
-            "evaluator output is not JSON ({err}): {}",
-            String::from_utf8_lossy(&eval.stderr)
-        )
-    })?;
+        ],
+    )?;
     let mut problems = Vec::new();
     for (key, pointer) in [
         ("flipped", "/flipped"),
@@ -162,18 +152,8 @@ fn check(input: &Path, out_dir: &Path, name: &str) -> Result<(), String> {
             (a, b) => problems.push(format!("{label}: evaluator {a:?}, our report {b:?}")),
         }
     }
-    if let Some(node_modules) = std::env::var_os("TEXATLAS_GLTF_VALIDATOR") {
-        let v = Command::new("node")
-            .env("NODE_PATH", node_modules)
-            .arg(eval_dir().join("gltf_validate.js"))
-            .arg(&out)
-            .output()
-            .map_err(|err| format!("cannot run node: {err}"))?;
-        let r: serde_json::Value = serde_json::from_slice(&v.stdout)
-            .map_err(|err| format!("validator output is not JSON ({err})"))?;
-        if r.get("errors").and_then(serde_json::Value::as_u64) != Some(0) {
-            problems.push(format!("validator: {r}"));
-        }
+    if let Err(why) = tools_common::validate(&out) {
+        problems.push(why);
     }
     println!(
         "{name:36} {:>8} {:>6} {:>8.4} {:>8.3} {:>7.3} {:>7.2}  {}",
