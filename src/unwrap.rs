@@ -17,18 +17,37 @@ use crate::atlas::{self, Atlas, AtlasError, Progress, Stage};
 use crate::gltf_io::{self, Asset, EncodeOptions, EncodedAsset, GltfError};
 use crate::mesh::{MeshBuildError, TriangleMesh};
 
-/// Why an unwrap failed.
+/// Why an unwrap failed. The message includes the inner error's, so the inner error is not
+/// also reported as a `source` (an error chain printed with `{:#}` would repeat it).
 #[derive(Debug, thiserror::Error)]
 pub enum UnwrapError {
     /// The triangles cannot form a mesh (no triangles, bad indices, non-finite coordinates).
     #[error("the asset's triangles cannot be unwrapped: {0}")]
-    Mesh(#[from] MeshBuildError),
+    Mesh(MeshBuildError),
     /// The pipeline failed or was cancelled.
     #[error("{0}")]
-    Atlas(#[from] AtlasError),
+    Atlas(AtlasError),
     /// Writing the asset back failed.
     #[error("writing the result failed: {0}")]
-    Encode(#[from] GltfError),
+    Encode(GltfError),
+}
+
+impl From<MeshBuildError> for UnwrapError {
+    fn from(e: MeshBuildError) -> Self {
+        UnwrapError::Mesh(e)
+    }
+}
+
+impl From<AtlasError> for UnwrapError {
+    fn from(e: AtlasError) -> Self {
+        UnwrapError::Atlas(e)
+    }
+}
+
+impl From<GltfError> for UnwrapError {
+    fn from(e: GltfError) -> Self {
+        UnwrapError::Encode(e)
+    }
 }
 
 impl UnwrapError {

@@ -146,6 +146,23 @@ fn bad_options_and_files_fail_with_a_clear_message() {
     let e = stderr(&o);
     assert!(e.contains("garbage.glb") && e.contains("GLB header"), "{e}");
     assert!(!out.exists(), "no output on failure");
+    // A chart larger than a page at the asked density: the fix is named, and said once.
+    let box_glb = fixture("Box.glb");
+    let o = texatlas(&[
+        "unwrap",
+        s(&box_glb),
+        "-o",
+        s(&out),
+        "--resolution",
+        "64",
+        "--texels-per-unit",
+        "1000",
+    ]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("lower texels_per_unit"), "{e}");
+    assert_eq!(e.matches("packing failed").count(), 1, "said once: {e}");
+    assert!(!out.exists(), "no output on failure");
 }
 
 /// A GLB of a generated torus (several charts, enough work for rayon to split).
