@@ -46,7 +46,8 @@
 //!
 //! The pins (lscm-2002 §2.6) are chosen on the full chart and locked in the progressive mesh,
 //! so every level solves the same pinned problem. Units as in [`super`]: UVs in model units.
-//! Determinism: sequential progressive mesh, deterministic CG reductions, sequential faer.
+//! Determinism: progressive mesh identical at any thread count (see its module doc),
+//! deterministic CG reductions, sequential faer.
 use std::ops::ControlFlow;
 
 use crate::numerics::{solve_pcg, CgOptions, CsrMatrix, Jacobi, Preconditioner, SparseCholesky};
