@@ -257,7 +257,7 @@ pub fn run_method(
         BenchMethod::Hlscm => {
             // Same steps as `parameterize_chart` with `Hierarchical`, split to time the phases
             // as hlscm-2003 Table 1 does ("PM construction" vs "multigrid").
-            let options = HlscmOptions::default();
+            let options = hlscm_options_from_env();
             let topology = chart.validate()?;
             let pins = diameter_pins(chart, &topology);
             let t0 = Instant::now();
@@ -326,6 +326,26 @@ pub fn run_method(
         levels,
         phases,
     })
+}
+
+/// HLSCM options of the bench: the defaults, except for tuning experiments through
+/// `TEXATLAS_BENCH_HLSCM_COARSEST_MAX_VERTICES`, `TEXATLAS_BENCH_HLSCM_RELAX_ITERATIONS` and
+/// `TEXATLAS_BENCH_HLSCM_FINAL_ENERGY_TOLERANCE` (unset in every figure we publish).
+fn hlscm_options_from_env() -> HlscmOptions {
+    let mut o = HlscmOptions::default();
+    let var = |name: &str| std::env::var(name).ok();
+    if let Some(v) = var("TEXATLAS_BENCH_HLSCM_COARSEST_MAX_VERTICES").and_then(|v| v.parse().ok())
+    {
+        o.coarsest_max_vertices = v;
+    }
+    if let Some(v) = var("TEXATLAS_BENCH_HLSCM_RELAX_ITERATIONS").and_then(|v| v.parse().ok()) {
+        o.relax_iterations = v;
+    }
+    if let Some(v) = var("TEXATLAS_BENCH_HLSCM_FINAL_ENERGY_TOLERANCE").and_then(|v| v.parse().ok())
+    {
+        o.final_energy_tolerance = v;
+    }
+    o
 }
 
 /// "The same final energy as the direct solve" means within this fraction of it.

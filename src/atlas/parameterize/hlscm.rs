@@ -40,13 +40,17 @@
 //! Stopping rule of the finest level (stated): relative residual `≤ final_tolerance` (1e-9), or
 //! the conformal energy decreased by at most `final_energy_tolerance·C` (1e-5) over the last
 //! `energy_window` (5) iterations, or `final_max_iterations` (500). Measured final energy vs the
-//! direct solve on the bench height fields: 4.3e-6 relative at 250k triangles (40 iterations,
-//! levels of 12.6k and 126k vertices) and 8.2e-6 at 1M triangles (48 iterations, levels of
-//! 50k and 501k vertices), i.e. 12× inside the 1e-4 target.
+//! direct solve on the bench height fields: 3.4e-6 relative at 250k triangles (41 iterations,
+//! levels of 12.6k and 126k vertices) and 7.1e-6 at 1M triangles (49 iterations, levels of
+//! 50k and 501k vertices), i.e. 14× inside the 1e-4 target. Tried and rejected
+//! (1M triangles, one run each): a third level (coarsest 5k vertices) needs 103 finest
+//! iterations instead of 49 (rel. energy 1.9e-5) and is slower; an energy tolerance of 2e-5
+//! saves 4 iterations for a 1.3e-5 relative energy, too little to trade the margin.
 //!
 //! The pins (lscm-2002 §2.6) are chosen on the full chart and locked in the progressive mesh,
 //! so every level solves the same pinned problem. Units as in [`super`]: UVs in model units.
-//! Determinism: sequential progressive mesh, deterministic CG reductions, sequential faer.
+//! Determinism: progressive mesh identical at any thread count (see its module doc),
+//! deterministic CG reductions, sequential faer.
 use std::ops::ControlFlow;
 
 use crate::numerics::{solve_pcg, CgOptions, CsrMatrix, Jacobi, Preconditioner, SparseCholesky};

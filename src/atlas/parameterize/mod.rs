@@ -10,7 +10,8 @@
 //!   non-positive signed area (empty means valid), so that chart validation can split the chart
 //!   (lscm-2002 §3.3);
 //! - deterministic: same input, same output bits, whatever the rayon thread count (fixed
-//!   reduction trees in `numerics`, sequential faer, sequential progressive-mesh construction).
+//!   reduction trees in `numerics`, sequential faer, a progressive mesh whose parallel
+//!   evaluation batches do not change its bits).
 //!
 //! Units: positions in model units (`_m`); UVs in model units (the second pin sits at the
 //! pins' path length from the first), NOT yet normalized to \[0,1\]: packing does that.
