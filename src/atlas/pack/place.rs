@@ -687,6 +687,79 @@ mod tests {
     }
 
     #[test]
+    fn chain_fill_holds_every_covered_centre_and_only_near_ones() {
+        let sets = [
+            crate::atlas::pack::test_charts::mixed_set(30, 13),
+            crate::atlas::pack::test_charts::realistic_set(1),
+        ];
+        let mut checked = 0u64;
+        for set in &sets {
+            for (i, owned) in set.iter().enumerate() {
+                let chart = owned.as_pack_chart();
+                let prep = prepare_chart(i, &chart).unwrap();
+                for density in [3.0, 17.5, 90.0] {
+                    for o in orientations(&chart, &prep, density, 3, 2, [1024, 1024]) {
+                        if o.dilated.is_none() {
+                            continue;
+                        }
+                        let (w, h) = (o.width_texels as u32, o.height_texels as u32);
+                        let local: Vec<[f64; 2]> =
+                            chart.uv.iter().map(|&p| o.apply(prep.centre, p)).collect();
+                        let tri = |t: &[u32; 3]| t.map(|k| local[k as usize]);
+                        let mut new = Mask::new(w, h);
+                        let edges: Vec<[[f64; 2]; 2]> = prep
+                            .chain
+                            .iter()
+                            .map(|e| e.map(|k| local[k as usize]))
+                            .collect();
+                        fill_chain(&mut new, &edges, CENTRE_GROW_TEXELS);
+                        rasterize_centres(
+                            &mut new,
+                            prep.loose
+                                .iter()
+                                .map(|&t| tri(&chart.triangles[t as usize])),
+                            CENTRE_GROW_TEXELS,
+                        );
+                        let mut wide = Mask::new(w, h);
+                        rasterize_centres(&mut wide, chart.triangles.iter().map(tri), 0.03);
+                        for y in 0..i64::from(h) {
+                            for x in 0..i64::from(w) {
+                                if new.get(x, y) {
+                                    assert!(wide.get(x, y), "chart {i}: far texel {x},{y}");
+                                }
+                            }
+                        }
+                        // Every centre in a closed triangle is marked (exact orientation tests).
+                        for t in chart.triangles {
+                            let [a, b, c] = tri(t);
+                            let s = cross(a, b, c).signum();
+                            let (x0, x1) = (a[0].min(b[0]).min(c[0]), a[0].max(b[0]).max(c[0]));
+                            let (y0, y1) = (a[1].min(b[1]).min(c[1]), a[1].max(b[1]).max(c[1]));
+                            for y in (y0.floor() as i64).max(0)
+                                ..=(y1.ceil() as i64).min(i64::from(h) - 1)
+                            {
+                                for x in (x0.floor() as i64).max(0)
+                                    ..=(x1.ceil() as i64).min(i64::from(w) - 1)
+                                {
+                                    let p = [x as f64 + 0.5, y as f64 + 0.5];
+                                    let inside = [(a, b), (b, c), (c, a)]
+                                        .iter()
+                                        .all(|&(u, v)| cross(u, v, p) * s >= 0.0);
+                                    if inside && s != 0.0 {
+                                        checked += 1;
+                                        assert!(new.get(x, y), "chart {i}: missed centre {x},{y}");
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 10_000, "{checked}");
+    }
+
+    #[test]
     fn quarter_turn_extents_equal_a_direct_rasterization() {
         // An L-shaped chart: its 90° footprint derived by re-indexing equals rasterizing it
         // turned (up to where the layout centres it, which is the same by symmetry here).
