@@ -3,7 +3,9 @@
 //! Purpose: turn one input chart into the candidate *orientations* the horizon packer chooses
 //! from. Each orientation is an affine map from the chart's UVs (model units) to local texel
 //! coordinates, with the chart's footprint `F` (texel centres in its slightly grown triangles,
-//! [`super::raster::rasterize_centres`]; the conservative raster of its outline triangles when
+//! computed as the nonzero-winding fill of the boundary chain of its well-shaped triangles,
+//! [`super::raster::fill_chain`], plus [`super::raster::rasterize_centres`] of the thin or
+//! reversed ones; the conservative raster of its outline triangles when
 //! it covers no centre) and `F` dilated
 //! by the padding (`D`), both summarised as per-column and per-row extents (the horizons of
 //! lscm-2002 §4 step 3, "with an additional margin").
@@ -27,7 +29,8 @@
 //!
 //! Units: chart UVs in model units; `_texels` on the page; `texels_per_unit` per model unit.
 //!
-//! Cost: per orientation rasterized, O(triangles × rows per triangle + D texels / 64 × padding);
+//! Cost: per orientation rasterized, O(boundary edges × rows per edge + loose triangles × rows
+//! + D texels / 64 × padding);
 //! orientations wider or taller than the page are not rasterized (bounded memory whatever the
 //! trial density).
 use super::raster::{fill_chain, rasterize_centres, rasterize_conservative, Mask};
