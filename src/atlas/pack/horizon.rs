@@ -321,7 +321,13 @@ impl HorizonPage {
             })
             .collect();
         let mut order: Vec<usize> = (0..prof.len()).filter(|&c| prof[c] != NO_LINE).collect();
-        order.sort_by_key(|&c| (prof[c], c));
+        // Only the 4 most protruding lines need an order (the key lines below); a partial
+        // selection, deterministic by (profile, line).
+        if order.len() > 4 {
+            order.select_nth_unstable_by_key(3, |&c| (prof[c], c));
+        }
+        let k4 = order.len().min(4);
+        order[..k4].sort_unstable_by_key(|&c| (prof[c], c));
         let n = order.len() as i64;
         if n == 0 {
             return;

@@ -176,7 +176,7 @@ pub const FIT_TOLERANCE: f64 = 3e-3;
 /// the page edge, all UVs in \[0,1\]. `monitor((done, total))` is called between charts; `Break`
 /// cancels with [`PackError::Cancelled`].
 ///
-/// Guarantees: the footprints ([`raster::rasterize_centres`], a superset of texel-centre
+/// Guarantees: the footprints ([`raster::fill_chain`], a superset of texel-centre
 /// sampled coverage) of any two charts on a page are more than `padding_texels` apart
 /// (Chebyshev) and at least `padding_texels` from the page edge; every chart has the same density (placed UV area =
 /// `area_m2 × texels_per_unit²` texels²); UVs finite in \[0,1\]; deterministic.

@@ -3,7 +3,9 @@
 //! Purpose: turn one input chart into the candidate *orientations* the horizon packer chooses
 //! from. Each orientation is an affine map from the chart's UVs (model units) to local texel
 //! coordinates, with the chart's footprint `F` (texel centres in its slightly grown triangles,
-//! [`super::raster::rasterize_centres`]; the conservative raster of its outline triangles when
+//! computed as the nonzero-winding fill of the boundary chain of its well-shaped triangles,
+//! [`super::raster::fill_chain`], plus [`super::raster::rasterize_centres`] of the thin or
+//! reversed ones; the conservative raster of its outline triangles when
 //! it covers no centre) and `F` dilated
 //! by the padding (`D`), both summarised as per-column and per-row extents (the horizons of
 //! lscm-2002 §4 step 3, "with an additional margin").
@@ -27,10 +29,11 @@
 //!
 //! Units: chart UVs in model units; `_texels` on the page; `texels_per_unit` per model unit.
 //!
-//! Cost: per orientation rasterized, O(triangles × rows per triangle + D texels / 64 × padding);
+//! Cost: per orientation rasterized, O(boundary edges × rows per edge + loose triangles × rows
+//! + D texels / 64 × padding);
 //! orientations wider or taller than the page are not rasterized (bounded memory whatever the
 //! trial density).
-use super::raster::{rasterize_centres, rasterize_conservative, Mask};
+use super::raster::{fill_chain, rasterize_centres, rasterize_conservative, Mask};
 use super::{PackChart, PackError};
 
 /// Margin kept between a chart's extreme vertices and the texel lines of its span, texels.
@@ -60,6 +63,12 @@ pub struct PreparedChart {
     /// Indices of the *outline* triangles ([`outline_triangles`]): the only ones rasterized,
     /// since they cover the boundary of the chart and so decide every per-line extent.
     pub outline: Vec<u32>,
+    /// The boundary chain of the well-shaped triangles of the majority orientation (directed
+    /// vertex pairs, interior edges cancelled against their opposite): their union is its
+    /// nonzero-winding fill ([`super::raster::fill_chain`]).
+    pub chain: Vec<[u32; 2]>,
+    /// The other triangles (thin, or of the minority orientation), rasterized one by one.
+    pub loose: Vec<u32>,
 }
 
 /// Validates a chart and computes its density-independent data.
@@ -137,6 +146,7 @@ pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChar
             }
         }
     }
+    let chain = boundary_chain(chart.uv, chart.triangles);
     Ok(PreparedChart {
         centre,
         unit_scale,
@@ -144,7 +154,69 @@ pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChar
         area_m2: if unit_scale > 0.0 { chart.area_m2 } else { 0.0 },
         has_vertices: !chart.uv.is_empty(),
         outline: outline_triangles(chart.uv, chart.triangles),
+        chain: chain.0,
+        loose: chain.1,
     })
+}
+
+/// Whether a triangle is well shaped for the boundary fill: its orientation is stable under
+/// the similarity to texels (rotation, uniform scale, rounding), as in
+/// [`super::raster::rasterize_centres`]'s thin-triangle test with the largest edge (rotation
+/// invariant, at least the box side) and a 100× margin.
+fn orientation_sign(p: [[f64; 2]; 3]) -> i32 {
+    let [a, b, c] = p;
+    let area2 = cross(a, b, c);
+    let l2 = |u: [f64; 2], v: [f64; 2]| (u[0] - v[0]).powi(2) + (u[1] - v[1]).powi(2);
+    let span2 = l2(a, b).max(l2(b, c)).max(l2(c, a));
+    if !(area2.abs() > 1e-4 * span2 && span2 > 0.0 && area2.is_finite()) {
+        0
+    } else if area2 > 0.0 {
+        1
+    } else {
+        -1
+    }
+}
+
+/// The boundary chain of the triangles of the majority orientation that are well shaped, and
+/// the others. Deterministic (sorted edges). Cost: O(t log t).
+pub fn boundary_chain(uv: &[[f64; 2]], triangles: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<u32>) {
+    let signs: Vec<i32> = triangles
+        .iter()
+        .map(|t| orientation_sign(t.map(|i| uv[i as usize])))
+        .collect();
+    let positive = signs.iter().filter(|&&s| s > 0).count();
+    let negative = signs.iter().filter(|&&s| s < 0).count();
+    let major = if positive >= negative { 1 } else { -1 };
+    let mut loose = Vec::new();
+    // (min, max, +1 if directed min→max else -1)
+    let mut edges: Vec<(u32, u32, i32)> = Vec::with_capacity(3 * triangles.len());
+    for (k, t) in triangles.iter().enumerate() {
+        if signs[k] != major {
+            loose.push(k as u32);
+            continue;
+        }
+        for e in 0..3 {
+            let (a, b) = (t[e], t[(e + 1) % 3]);
+            if a != b {
+                edges.push((a.min(b), a.max(b), if a < b { 1 } else { -1 }));
+            }
+        }
+    }
+    edges.sort_unstable();
+    let mut chain = Vec::new();
+    let mut g = 0;
+    while g < edges.len() {
+        let (a, b, _) = edges[g];
+        let mut net = 0i32;
+        while g < edges.len() && edges[g].0 == a && edges[g].1 == b {
+            net += edges[g].2;
+            g += 1;
+        }
+        for _ in 0..net.unsigned_abs() {
+            chain.push(if net > 0 { [a, b] } else { [b, a] });
+        }
+    }
+    (chain, loose)
 }
 
 /// The triangles that can touch the boundary of the chart's UV region `U` (the union of its
@@ -407,11 +479,22 @@ fn orient(
     let mut mask = Mask::new(dims[0] as u32, dims[1] as u32);
     // Every vertex once (not once per triangle corner).
     let local: Vec<[f64; 2]> = chart.uv.iter().map(|&p| o.apply(prep.centre, p)).collect();
-    let sampled = rasterize_centres(
+    // The union of the well-shaped triangles from their boundary chain (cost of the boundary,
+    // not of the triangles), the others one by one.
+    let edges: Vec<[[f64; 2]; 2]> = prep
+        .chain
+        .iter()
+        .map(|e| e.map(|i| local[i as usize]))
+        .collect();
+    let filled = fill_chain(&mut mask, &edges, CENTRE_GROW_TEXELS);
+    let loose = rasterize_centres(
         &mut mask,
-        chart.triangles.iter().map(|t| t.map(|i| local[i as usize])),
+        prep.loose
+            .iter()
+            .map(|&t| chart.triangles[t as usize].map(|i| local[i as usize])),
         CENTRE_GROW_TEXELS,
     );
+    let sampled = filled || loose;
     if !sampled {
         // Samples no texel centre (a tiny chart): its conservative footprint, never empty.
         rasterize_conservative(
@@ -604,6 +687,79 @@ mod tests {
             }
         }
         assert!(skipped > 0 && skipped < total, "{skipped} of {total}");
+    }
+
+    #[test]
+    fn chain_fill_holds_every_covered_centre_and_only_near_ones() {
+        let sets = [
+            crate::atlas::pack::test_charts::mixed_set(30, 13),
+            crate::atlas::pack::test_charts::realistic_set(1),
+        ];
+        let mut checked = 0u64;
+        for set in &sets {
+            for (i, owned) in set.iter().enumerate() {
+                let chart = owned.as_pack_chart();
+                let prep = prepare_chart(i, &chart).unwrap();
+                for density in [3.0, 17.5, 90.0] {
+                    for o in orientations(&chart, &prep, density, 3, 2, [1024, 1024]) {
+                        if o.dilated.is_none() {
+                            continue;
+                        }
+                        let (w, h) = (o.width_texels as u32, o.height_texels as u32);
+                        let local: Vec<[f64; 2]> =
+                            chart.uv.iter().map(|&p| o.apply(prep.centre, p)).collect();
+                        let tri = |t: &[u32; 3]| t.map(|k| local[k as usize]);
+                        let mut new = Mask::new(w, h);
+                        let edges: Vec<[[f64; 2]; 2]> = prep
+                            .chain
+                            .iter()
+                            .map(|e| e.map(|k| local[k as usize]))
+                            .collect();
+                        fill_chain(&mut new, &edges, CENTRE_GROW_TEXELS);
+                        rasterize_centres(
+                            &mut new,
+                            prep.loose
+                                .iter()
+                                .map(|&t| tri(&chart.triangles[t as usize])),
+                            CENTRE_GROW_TEXELS,
+                        );
+                        let mut wide = Mask::new(w, h);
+                        rasterize_centres(&mut wide, chart.triangles.iter().map(tri), 0.03);
+                        for y in 0..i64::from(h) {
+                            for x in 0..i64::from(w) {
+                                if new.get(x, y) {
+                                    assert!(wide.get(x, y), "chart {i}: far texel {x},{y}");
+                                }
+                            }
+                        }
+                        // Every centre in a closed triangle is marked (exact orientation tests).
+                        for t in chart.triangles {
+                            let [a, b, c] = tri(t);
+                            let s = cross(a, b, c).signum();
+                            let (x0, x1) = (a[0].min(b[0]).min(c[0]), a[0].max(b[0]).max(c[0]));
+                            let (y0, y1) = (a[1].min(b[1]).min(c[1]), a[1].max(b[1]).max(c[1]));
+                            for y in (y0.floor() as i64).max(0)
+                                ..=(y1.ceil() as i64).min(i64::from(h) - 1)
+                            {
+                                for x in (x0.floor() as i64).max(0)
+                                    ..=(x1.ceil() as i64).min(i64::from(w) - 1)
+                                {
+                                    let p = [x as f64 + 0.5, y as f64 + 0.5];
+                                    let inside = [(a, b), (b, c), (c, a)]
+                                        .iter()
+                                        .all(|&(u, v)| cross(u, v, p) * s >= 0.0);
+                                    if inside && s != 0.0 {
+                                        checked += 1;
+                                        assert!(new.get(x, y), "chart {i}: missed centre {x},{y}");
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 10_000, "{checked}");
     }
 
     #[test]
