@@ -12,7 +12,9 @@
 //! independent evaluator `../shared/eval/atlas_eval.py`, also after `f32` rounding) of two
 //! charts on a page are at Chebyshev distance `> padding_texels`, and every footprint texel is
 //! at least `padding_texels` from the page edge ("padding.violation_texels" = 0). Charts too
-//! small to cover a texel centre use their conservative footprint (every texel touched). The
+//! small to cover a texel centre use their conservative footprint (every texel touched); the
+//! touched texels of thin parts (slivers, spikes) away from the sampled footprint are added to
+//! it (see `place::orientation`), so that no two charts' triangles overlap exactly either. The
 //! whole chart stays inside its grid, which stays on the page (UVs in \[0,1\]).
 //! Every chart has the same density: placed UV area = `area_m2 × texels_per_unit²` texels².
 //! Deterministic: integer horizons, fixed orders, ties by index; no hash maps, no threads.

@@ -29,11 +29,12 @@
 //!
 //! Units: chart UVs in model units; `_texels` on the page; `texels_per_unit` per model unit.
 //!
-//! Cost: per orientation rasterized, O(boundary edges × rows per edge + loose triangles × rows
-//! + D texels / 64 × padding);
-//! orientations wider or taller than the page are not rasterized (bounded memory whatever the
-//! trial density).
-use super::raster::{fill_chain, rasterize_centres, rasterize_conservative, Mask};
+//! Cost: per orientation rasterized, O(boundary edges × rows per edge, plus loose triangles ×
+//! rows, plus D texels / 64 × padding); orientations wider or taller than the page are not
+//! rasterized (bounded memory whatever the trial density).
+use super::raster::{
+    fill_chain, rasterize_centres, rasterize_conservative, rasterize_touching, Mask,
+};
 use super::{PackChart, PackError};
 
 /// Margin kept between a chart's extreme vertices and the texel lines of its span, texels.
@@ -503,6 +504,30 @@ fn orient(
                 .iter()
                 .map(|&t| chart.triangles[t as usize].map(|i| local[i as usize])),
         );
+    }
+    if sampled {
+        // Exact non-overlap. The sampled footprint `L` misses the parts of a chart that cover
+        // no texel centre (slivers, thin spikes); another chart could be laid over them. `T`,
+        // the texels touched by the boundary chain and by the loose triangles, holds every
+        // texel the chart touches whose centre is not in `L` (such a texel meets the chart and
+        // its complement, hence the chart's boundary). The footprint becomes
+        // `M = L ∪ (T \ dilate(L, ⌊p/2⌋))`: two footprints more than `p` apart (what the packer
+        // enforces) then have disjoint touched texels, so their triangles' interiors cannot
+        // meet — a touched texel of A within ⌊p/2⌋ of `L_A` and one of B within ⌊p/2⌋ of `L_B`
+        // would put `L_A` and `L_B` within `p`. For ordinary charts `T ⊆ dilate(L, 1)` and
+        // nothing changes when `p ≥ 2`.
+        let mut touched = Mask::new(mask.width(), mask.height());
+        rasterize_touching(
+            &mut touched,
+            edges.iter().map(|&[p, q]| [p, q, q]).chain(
+                prep.loose
+                    .iter()
+                    .map(|&t| chart.triangles[t as usize].map(|i| local[i as usize])),
+            ),
+            CENTRE_GROW_TEXELS,
+        );
+        let near = mask.dilate(padding_texels / 2);
+        mask.add_except(&touched, &near);
     }
     if chart.triangles.is_empty() {
         // A chart without triangles still gets its one texel.

@@ -147,6 +147,18 @@ impl Mask {
         out
     }
 
+    /// Adds the texels of `extra` that are not in `except` (same grid): `self |= extra & !except`.
+    pub fn add_except(&mut self, extra: &Mask, except: &Mask) {
+        assert!(
+            (self.width, self.height) == (extra.width, extra.height)
+                && (self.width, self.height) == (except.width, except.height),
+            "masks on one grid"
+        );
+        for ((b, &x), &n) in self.bits.iter_mut().zip(&extra.bits).zip(&except.bits) {
+            *b |= x & !n;
+        }
+    }
+
     /// Clears the bits past `width` in each row's last word.
     fn clear_padding_bits(&mut self) {
         let rem = self.width % 64;
@@ -250,11 +262,22 @@ impl Mask {
 ///
 /// Cost: O(rows spanned) per triangle plus the spans written.
 pub fn rasterize_conservative(mask: &mut Mask, triangles: impl IntoIterator<Item = [[f64; 2]; 3]>) {
+    rasterize_touching(mask, triangles, TOUCH_EPS_TEXELS);
+}
+
+/// [`rasterize_conservative`] with every touch test widened by `eps_texels` instead of
+/// [`TOUCH_EPS_TEXELS`]: every texel within `eps_texels` of a triangle (segments `[p, q, q]`
+/// included) is marked.
+pub fn rasterize_touching(
+    mask: &mut Mask,
+    triangles: impl IntoIterator<Item = [[f64; 2]; 3]>,
+    eps_texels: f64,
+) {
     if mask.width() == 0 || mask.height() == 0 {
         return;
     }
     let (w, h) = (i64::from(mask.width()), i64::from(mask.height()));
-    const E: f64 = TOUCH_EPS_TEXELS;
+    let eps = eps_texels.max(TOUCH_EPS_TEXELS);
     for mut t in triangles {
         if t.iter().any(|p| {
             !(p[0].is_finite() && p[1].is_finite() && p[0].abs() < 1e15 && p[1].abs() < 1e15)
@@ -272,9 +295,9 @@ pub fn rasterize_conservative(mask: &mut Mask, triangles: impl IntoIterator<Item
             t.swap(0, 1);
         }
         let [a, b, c] = t;
-        // Rows whose closed slab [j, j+1] meets [a.y - E, c.y + E]: ceil(lo) - 1 ..= floor(hi).
-        let j0 = (ceil_i(a[1] - E) - 1).max(0);
-        let j1 = floor_i(c[1] + E).min(h - 1);
+        // Rows whose closed slab [j, j+1] meets [a.y - eps, c.y + eps]: ceil(lo) - 1 ..= floor(hi).
+        let j0 = (ceil_i(a[1] - eps) - 1).max(0);
+        let j1 = floor_i(c[1] + eps).min(h - 1);
         if j0 > j1 {
             continue;
         }
@@ -310,7 +333,7 @@ pub fn rasterize_conservative(mask: &mut Mask, triangles: impl IntoIterator<Item
                 xmax = xmax.max(x1);
             }
             for p in [a, b, c] {
-                if p[1] >= lo - E && p[1] <= hi + E {
+                if p[1] >= lo - eps && p[1] <= hi + eps {
                     xmin = xmin.min(p[0]);
                     xmax = xmax.max(p[0]);
                 }
@@ -319,9 +342,9 @@ pub fn rasterize_conservative(mask: &mut Mask, triangles: impl IntoIterator<Item
             if xmin > xmax {
                 continue;
             }
-            // Columns whose closed interval [i, i+1] meets [xmin - E, xmax + E].
-            let i0 = (ceil_i(xmin - E) - 1).max(0);
-            let i1 = floor_i(xmax + E).min(w - 1);
+            // Columns whose closed interval [i, i+1] meets [xmin - eps, xmax + eps].
+            let i0 = (ceil_i(xmin - eps) - 1).max(0);
+            let i1 = floor_i(xmax + eps).min(w - 1);
             if i0 <= i1 {
                 mask.set_span(j as u32, i0 as u32, i1 as u32);
             }

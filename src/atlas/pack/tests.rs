@@ -379,3 +379,67 @@ fn non_square_pages_follow_the_page_aspect() {
     assert_guarantees(&check, "1024×256");
     assert!(check.efficiency > 0.45, "{check:?}");
 }
+
+/// Whether the open interiors of two triangles meet (no separating edge line; `f64` is enough
+/// here: placed charts are texels apart, far from any tie).
+fn interiors_meet(a: [[f64; 2]; 3], b: [[f64; 2]; 3]) -> bool {
+    let side = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| {
+        (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+    };
+    let separated_by_edge_of = |t: [[f64; 2]; 3], u: [[f64; 2]; 3]| {
+        let orient = side(t[0], t[1], t[2]).signum();
+        (0..3).any(|e| {
+            let (p, q) = (t[e], t[(e + 1) % 3]);
+            u.iter().all(|&r| orient * side(p, q, r) <= 0.0)
+        })
+    };
+    !(separated_by_edge_of(a, b) || separated_by_edge_of(b, a))
+}
+
+#[test]
+fn slivers_that_cover_no_texel_centre_are_never_overlapped() {
+    // Long triangles a fraction of a texel thick cover few or no texel centres, so a
+    // centre-sampled footprint would let other charts lie on them; the footprint must hold
+    // every texel they touch.
+    let mut charts: Vec<OwnedChart> = (0..12)
+        .map(|k| {
+            let (len, thick) = (40.0 + 7.0 * f64::from(k), 0.2 + 0.05 * f64::from(k % 4));
+            triangle([[0.0, 0.0], [len, 0.0], [0.5 * len, thick]])
+        })
+        .collect();
+    charts.extend(mixed_set(30, 4));
+    for padding_texels in [0, 1, 2, 4] {
+        let options = PackOptions {
+            width_texels: 512,
+            height_texels: 512,
+            padding_texels,
+            ..PackOptions::default()
+        };
+        let (packing, check) = pack(&charts, &options);
+        assert_guarantees(&check, "slivers");
+        let borrowed = as_pack_charts(&charts);
+        let placed: Vec<(u32, usize, [[f64; 2]; 3])> = borrowed
+            .iter()
+            .enumerate()
+            .flat_map(|(c, chart)| {
+                let p = &packing.charts[c];
+                chart
+                    .triangles
+                    .iter()
+                    .map(move |t| (p.page, c, t.map(|i| p.uv[i as usize])))
+            })
+            .collect();
+        let mut pairs = 0;
+        for (i, a) in placed.iter().enumerate() {
+            for b in &placed[i + 1..] {
+                if a.0 == b.0 && a.1 != b.1 && interiors_meet(a.2, b.2) {
+                    pairs += 1;
+                }
+            }
+        }
+        assert_eq!(
+            pairs, 0,
+            "padding {padding_texels}: overlapping triangle pairs"
+        );
+    }
+}
