@@ -97,7 +97,7 @@ use rayon::prelude::*;
 use std::sync::Arc;
 
 use crate::atlas::parameterize::{
-    conformal_energy, flipped_faces, parameterize_chart, ChartMap, ParameterizeError,
+    conformal_energy, flipped_faces, parameterize_chart_with_topology, ChartMap, ParameterizeError,
     ParameterizeMethod, ParameterizeOptions,
 };
 use crate::mesh::{FaceId, TriangleMesh, VertexId};
@@ -450,9 +450,9 @@ fn flatten_chart(mesh: &TriangleMesh, faces: &[FaceId], options: &ValidateOption
             return Attempt::NotADiskWithoutDegenerate;
         }
         let (cm, global) = chart_mesh(mesh, &kept);
-        match parameterize_chart(&cm, &options.parameterize) {
-            Ok(map) => {
-                let defect = find_defect(&kept, &cm, &map, options);
+        match parameterize_chart_with_topology(&cm, &options.parameterize) {
+            Ok((map, topology)) => {
+                let defect = find_defect(&kept, &cm, &topology.boundary_loop, &map, options);
                 let map = if kept.len() == faces.len() {
                     (map, global)
                 } else {
@@ -526,7 +526,8 @@ fn restrict_map(
         pins,
         hlscm: None,
     };
-    find_defect(faces, &cm, &map, options)
+    let topology = cm.validate().ok()?;
+    find_defect(faces, &cm, &topology.boundary_loop, &map, options)
         .is_none()
         .then_some((map, global))
 }
@@ -948,6 +949,7 @@ type MergeKey = (usize, u32, usize, u32);
 fn find_defect(
     faces: &[FaceId],
     cm: &crate::atlas::parameterize::ChartMesh,
+    boundary_loop: &[u32],
     map: &ChartMap,
     options: &ValidateOptions,
 ) -> Option<ChartDefect> {
@@ -956,7 +958,15 @@ fn find_defect(
             count: map.flipped_faces.len(),
         });
     }
-    if let Some([i, j]) = boundary_crossing(cm, &map.uv).or_else(|| vertex_fold(cm, &map.uv)) {
+    let segs = loop_segments(cm, boundary_loop);
+    let crossing = crossing_among(&segs, &map.uv).or_else(|| {
+        let mut on_boundary = vec![false; cm.positions_m.len()];
+        for &v in boundary_loop {
+            on_boundary[v as usize] = true;
+        }
+        fold_with_boundary(cm, &map.uv, &on_boundary)
+    });
+    if let Some([i, j]) = crossing {
         return Some(ChartDefect::BoundaryOverlap {
             faces: [faces[i], faces[j]],
         });
@@ -998,8 +1008,16 @@ fn find_defect(
         sum2 += area2;
         sum_l2 += area3 * l2sq;
     }
-    per_face.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    let (lo, hi) = (per_face[0], per_face[per_face.len() - 1]);
+    // The first and last faces in (ratio, index) order, by one scan: the stretch split and
+    // the untrimmed area test need no more (the trimmed test sorts below).
+    let by_ratio =
+        |a: &(f64, usize, f64), b: &(f64, usize, f64)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
+    let (Some(&lo), Some(&hi)) = (
+        per_face.iter().min_by(|a, b| by_ratio(a, b)),
+        per_face.iter().max_by(|a, b| by_ratio(a, b)),
+    ) else {
+        return None;
+    };
     if let Some(max_stretch) = options.max_stretch {
         // The chart scaled to UV area = model area (as the packer does) multiplies a and c by
         // sum2 / sum3.
@@ -1013,6 +1031,16 @@ fn find_defect(
         }
     }
     let max_ratio = options.max_area_ratio?;
+    if options.area_ratio_trim == 0.0 && lo.2 > 0.0 && hi.2 > 0.0 {
+        // No trim: the quantiles below are the first and last faces.
+        let ratio = hi.0 / lo.0;
+        return (ratio > max_ratio).then(|| ChartDefect::AreaRatio {
+            ratio,
+            min_face: faces[lo.1],
+            max_face: faces[hi.1],
+        });
+    }
+    per_face.sort_by(by_ratio);
     // Area-weighted quantiles: skip `area_ratio_trim · sum3` of model area at each end.
     let trim = options.area_ratio_trim * sum3;
     let quantile = |iter: &mut dyn Iterator<Item = &(f64, usize, f64)>| {
@@ -1068,13 +1096,41 @@ pub fn vertex_fold(
     uv: &[[f64; 2]],
 ) -> Option<[usize; 2]> {
     let n = cm.positions_m.len();
+    let mut directed: Vec<(u32, u32)> = Vec::with_capacity(3 * cm.triangles.len());
+    for t in &cm.triangles {
+        for s in 0..3 {
+            directed.push((t[s], t[(s + 1) % 3]));
+        }
+    }
+    let mut sorted = directed.clone();
+    sorted.sort_unstable();
+    let mut boundary = vec![false; n];
+    for &(a, b) in &directed {
+        if sorted.binary_search(&(b, a)).is_err() {
+            if let Some(slot) = boundary.get_mut(a as usize) {
+                *slot = true;
+            }
+        }
+    }
+    fold_with_boundary(cm, uv, &boundary)
+}
+
+/// [`vertex_fold`] with the boundary vertices given (`boundary[v]`, one flag per chart vertex),
+/// e.g. from the chart's boundary loop. Cost: O(k).
+fn fold_with_boundary(
+    cm: &crate::atlas::parameterize::ChartMesh,
+    uv: &[[f64; 2]],
+    boundary: &[bool],
+) -> Option<[usize; 2]> {
+    let n = cm.positions_m.len();
+    if boundary.len() != n {
+        return None;
+    }
     let mut sum = vec![0.0f64; n];
     let mut fan: Vec<[usize; 2]> = vec![[usize::MAX, 0]; n];
-    let mut directed: Vec<(u32, u32)> = Vec::with_capacity(3 * cm.triangles.len());
     for (k, t) in cm.triangles.iter().enumerate() {
         for s in 0..3 {
             let (v, a, b) = (t[s], t[(s + 1) % 3], t[(s + 2) % 3]);
-            directed.push((v, a));
             let (pv, pa, pb) = (
                 uv.get(v as usize)?,
                 uv.get(a as usize)?,
@@ -1086,18 +1142,10 @@ pub fn vertex_fold(
             );
             let cross = e1[0] * e2[1] - e1[1] * e2[0];
             let dot = e1[0] * e2[0] + e1[1] * e2[1];
-            sum[v as usize] += cross.atan2(dot).abs();
-            let f = &mut fan[v as usize];
+            let (sv, f) = (sum.get_mut(v as usize)?, fan.get_mut(v as usize)?);
+            *sv += cross.atan2(dot).abs();
             f[0] = f[0].min(k);
             f[1] = f[1].max(k);
-        }
-    }
-    let mut sorted = directed.clone();
-    sorted.sort_unstable();
-    let mut boundary = vec![false; n];
-    for &(a, b) in &directed {
-        if sorted.binary_search(&(b, a)).is_err() {
-            boundary[a as usize] = true;
         }
     }
     let tau = std::f64::consts::TAU;
@@ -1155,12 +1203,44 @@ pub fn boundary_crossing(
         .into_iter()
         .filter(|&(a, b, _)| keys.binary_search(&(b, a)).is_err())
         .collect();
+    crossing_among(&segs, uv)
+}
+
+/// The boundary half-edges `(a, b, owning triangle)` of a chart that passed
+/// `ChartMesh::validate`, from its boundary loop, in the order of [`boundary_crossing`] (by
+/// triangle, then side), without sorting: `a → b` is on the boundary exactly when `b` follows
+/// `a` on the loop (a manifold chart uses each directed edge once). Cost: O(k).
+fn loop_segments(
+    cm: &crate::atlas::parameterize::ChartMesh,
+    boundary_loop: &[u32],
+) -> Vec<(u32, u32, usize)> {
+    let mut next = vec![u32::MAX; cm.positions_m.len()];
+    for (w, &v) in boundary_loop.iter().enumerate() {
+        if let Some(slot) = next.get_mut(v as usize) {
+            *slot = boundary_loop[(w + 1) % boundary_loop.len()];
+        }
+    }
+    let mut segs = Vec::with_capacity(boundary_loop.len());
+    for (k, t) in cm.triangles.iter().enumerate() {
+        for s in 0..3 {
+            let (a, b) = (t[s], t[(s + 1) % 3]);
+            if next.get(a as usize) == Some(&b) {
+                segs.push((a, b, k));
+            }
+        }
+    }
+    segs
+}
+
+/// Two of the boundary segments `segs` (`(a, b, owning triangle)`) that do not share an
+/// endpoint and intersect in UV, as their triangles; see [`boundary_crossing`].
+fn crossing_among(segs: &[(u32, u32, usize)], uv: &[[f64; 2]]) -> Option<[usize; 2]> {
     let n = segs.len();
     if n < 4 {
         return None;
     }
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for &(a, b, _) in &segs {
+    for &(a, b, _) in segs {
         for p in [uv.get(a as usize)?, uv.get(b as usize)?] {
             for k in 0..2 {
                 lo[k] = lo[k].min(p[k]);
