@@ -339,8 +339,11 @@ fn free_numbering(n: usize, pins: &[Pin]) -> Result<(Vec<u32>, Vec<u32>), Parame
 /// a quarter of the entries and stores half the values (see
 /// [`crate::numerics::HermitianCholesky`]); only the upper triangle is assembled.
 ///
-/// Returns one UV per chart vertex (pins at their UVs). Errors: bad pins, a foreign topology,
-/// a failed factorization. Cost: `O(F)` assembly plus the factorization.
+/// Any number `p ≥ 2` of pins is allowed (the minimizer is then unique, appendix A.1); with
+/// more than two, the map is the least squares conformal extension of the pinned UVs to the
+/// free vertices (chart validation pins a chart's shared vertices to a neighbour's map when it
+/// tries to merge them). Returns one UV per chart vertex (pins at their UVs). Errors: bad pins,
+/// a foreign topology, a failed factorization. Cost: `O(F)` assembly plus the factorization.
 pub fn solve_direct_complex(
     chart: &ChartMesh,
     topology: &ChartTopology,
@@ -372,13 +375,12 @@ pub fn solve_direct_complex(
     }
     let mut values = vec![[0.0f64; 2]; row_idx.len()];
     let mut rhs = vec![[0.0f64; 2]; f];
-    let uv_of_pin = |v: u32| -> [f64; 2] {
-        pins.iter()
-            .rev()
-            .find(|p| p.vertex == v)
-            .map(|p| p.uv)
-            .unwrap_or([0.0, 0.0])
-    };
+    // The UV of each pinned vertex (the last pin wins, as in `LscmSystem::assemble`).
+    let mut pin_uv = vec![[0.0f64; 2]; n];
+    for pin in pins {
+        pin_uv[pin.vertex as usize] = pin.uv;
+    }
+    let uv_of_pin = |v: u32| pin_uv[v as usize];
     for t in &chart.triangles {
         let p = t.map(|i| chart.positions_m[i as usize]);
         let (w, d_t) = triangle_coefficients(p);
@@ -413,9 +415,13 @@ pub fn solve_direct_complex(
             }
         }
     }
-    let factor = HermitianCholesky::factor_upper(f, &col_ptr, &row_idx, &values)
-        .map_err(ParameterizeError::Direct)?;
-    let x = factor.solve(&rhs).map_err(ParameterizeError::Direct)?;
+    let x = if f == 0 {
+        Vec::new()
+    } else {
+        let factor = HermitianCholesky::factor_upper(f, &col_ptr, &row_idx, &values)
+            .map_err(ParameterizeError::Direct)?;
+        factor.solve(&rhs).map_err(ParameterizeError::Direct)?
+    };
     let mut uv = vec![[0.0; 2]; n];
     for (&v, z) in free_vertices.iter().zip(x) {
         uv[v as usize] = z;

@@ -296,6 +296,7 @@ fn flatten_validated(
     if !uv.iter().all(|p| p[0].is_finite() && p[1].is_finite()) {
         return Err(ParameterizeError::NonFiniteResult);
     }
+
     Ok(ChartMap {
         conformal_energy: conformal_energy(chart, &uv),
         flipped_faces: flipped_faces(chart, &uv),
