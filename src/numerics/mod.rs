@@ -25,4 +25,4 @@ pub mod sparse_cholesky;
 
 pub use cg::{solve_cg, solve_pcg, CgOptions, CgOutcome, CgStep, Jacobi, Preconditioner};
 pub use sparse::{CsrMatrix, SparseError, Triplet};
-pub use sparse_cholesky::{CholeskyError, SparseCholesky};
+pub use sparse_cholesky::{CholeskyError, HermitianCholesky, SparseCholesky};

@@ -33,7 +33,9 @@
 use std::ops::ControlFlow;
 
 use crate::numerics::cg::CgStep;
-use crate::numerics::{solve_cg, CgOptions, CgOutcome, CsrMatrix, SparseCholesky};
+use crate::numerics::{
+    solve_cg, CgOptions, CgOutcome, CsrMatrix, HermitianCholesky, SparseCholesky,
+};
 
 use super::chart::{cross, dot3, exceeds, norm3, sub, ChartMesh, ChartTopology};
 use super::ParameterizeError;
@@ -103,54 +105,10 @@ impl LscmSystem {
         pins: &[Pin],
     ) -> Result<Self, ParameterizeError> {
         let n = chart.positions_m.len();
-        // The topology is a public struct: check it belongs to this chart before indexing.
-        let topology_fits = topology.neighbor_ptr.len() == n + 1
-            && topology.neighbor_ptr.last() == Some(&topology.neighbors.len())
-            && topology.neighbor_ptr.windows(2).all(|w| w[0] <= w[1])
-            && topology.neighbors.iter().all(|&w| (w as usize) < n)
-            && chart
-                .triangles
-                .iter()
-                .all(|t| t.iter().all(|&i| (i as usize) < n));
-        if !topology_fits {
-            return Err(ParameterizeError::Internal {
-                detail: "topology does not belong to this chart; use ChartMesh::validate"
-                    .to_string(),
-            });
+        if !topology_fits(chart, topology) {
+            return Err(foreign_topology());
         }
-        let mut free_index = vec![0u32; n];
-        for pin in pins {
-            match free_index.get_mut(pin.vertex as usize) {
-                Some(slot) => *slot = PINNED,
-                None => {
-                    return Err(ParameterizeError::BadPins {
-                        detail: format!("pin vertex {} is not in the chart", pin.vertex),
-                    })
-                }
-            }
-            if !pin.uv.iter().all(|c| c.is_finite()) {
-                return Err(ParameterizeError::BadPins {
-                    detail: format!("pin vertex {} has a non-finite UV", pin.vertex),
-                });
-            }
-        }
-        let distinct_pins = free_index.iter().filter(|&&f| f == PINNED).count();
-        let spread = pins
-            .iter()
-            .any(|p| pins.iter().any(|q| p.uv != q.uv && p.vertex != q.vertex));
-        if distinct_pins < 2 || !spread {
-            return Err(ParameterizeError::BadPins {
-                detail: "LSCM needs at least two distinct pinned vertices with distinct UVs"
-                    .to_string(),
-            });
-        }
-        let mut free_vertices = Vec::with_capacity(n);
-        for (v, slot) in free_index.iter_mut().enumerate() {
-            if *slot != PINNED {
-                *slot = free_vertices.len() as u32;
-                free_vertices.push(v as u32);
-            }
-        }
+        let (free_index, free_vertices) = free_numbering(n, pins)?;
         let f = free_vertices.len();
         // Sparsity pattern: row pair of free vertex i couples to the unknowns of i and of its
         // free neighbours.
@@ -329,6 +287,167 @@ impl LscmSystem {
             }
         }
         x
+    }
+}
+
+/// The free-vertex numbering of a chart with `n` vertices and these pins: free number (or
+/// `PINNED`) per vertex, ascending with the vertex index, and the vertex of each free number.
+/// Checks the pins: in range, finite, at least two distinct vertices with distinct UVs
+/// (appendix A.1: full rank when `p ≥ 2`).
+fn free_numbering(n: usize, pins: &[Pin]) -> Result<(Vec<u32>, Vec<u32>), ParameterizeError> {
+    let mut free_index = vec![0u32; n];
+    for pin in pins {
+        match free_index.get_mut(pin.vertex as usize) {
+            Some(slot) => *slot = PINNED,
+            None => {
+                return Err(ParameterizeError::BadPins {
+                    detail: format!("pin vertex {} is not in the chart", pin.vertex),
+                })
+            }
+        }
+        if !pin.uv.iter().all(|c| c.is_finite()) {
+            return Err(ParameterizeError::BadPins {
+                detail: format!("pin vertex {} has a non-finite UV", pin.vertex),
+            });
+        }
+    }
+    let distinct_pins = free_index.iter().filter(|&&f| f == PINNED).count();
+    let spread = pins
+        .iter()
+        .any(|p| pins.iter().any(|q| p.uv != q.uv && p.vertex != q.vertex));
+    if distinct_pins < 2 || !spread {
+        return Err(ParameterizeError::BadPins {
+            detail: "LSCM needs at least two distinct pinned vertices with distinct UVs"
+                .to_string(),
+        });
+    }
+    let mut free_vertices = Vec::with_capacity(n);
+    for (v, slot) in free_index.iter_mut().enumerate() {
+        if *slot != PINNED {
+            *slot = free_vertices.len() as u32;
+            free_vertices.push(v as u32);
+        }
+    }
+    Ok((free_index, free_vertices))
+}
+
+/// The LSCM map of a validated chart by one sparse direct solve of the normal equations in
+/// complex form (lscm-2002 §2.5: `C(U) = U*·𝒞·U` with the Hermitian `𝒞 = M*M`): the free
+/// unknowns `U_f` solve `𝒞_ff·U_f = −𝒞_fp·U_p`. This is the system [`LscmSystem`] assembles in
+/// real form (each complex entry `c` of `𝒞` is its 2×2 block `[[Re c, −Im c], [Im c, Re c]]`),
+/// so the map is the same up to rounding, but the factorization orders half the unknowns with
+/// a quarter of the entries and stores half the values (see
+/// [`crate::numerics::HermitianCholesky`]); only the upper triangle is assembled.
+///
+/// Any number `p ≥ 2` of pins is allowed (the minimizer is then unique, appendix A.1); with
+/// more than two, the map is the least squares conformal extension of the pinned UVs to the
+/// free vertices (chart validation pins a chart's shared vertices to a neighbour's map when it
+/// tries to merge them). Returns one UV per chart vertex (pins at their UVs). Errors: bad pins,
+/// a foreign topology, a failed factorization. Cost: `O(F)` assembly plus the factorization.
+pub fn solve_direct_complex(
+    chart: &ChartMesh,
+    topology: &ChartTopology,
+    pins: &[Pin],
+) -> Result<Vec<[f64; 2]>, ParameterizeError> {
+    let n = chart.positions_m.len();
+    if !topology_fits(chart, topology) {
+        return Err(foreign_topology());
+    }
+    let (free_index, free_vertices) = free_numbering(n, pins)?;
+    let f = free_vertices.len();
+    // Column k (free vertex v): its free neighbours below it, then itself. Neighbours are
+    // ascending and the free numbering follows the vertex order, so rows come out ascending.
+    let mut col_ptr: Vec<u32> = Vec::with_capacity(f + 1);
+    col_ptr.push(0);
+    let mut row_idx: Vec<u32> = Vec::with_capacity(f + topology.neighbors.len() / 2 + 1);
+    for (k, &v) in free_vertices.iter().enumerate() {
+        for &w in topology.neighbors_of(v) {
+            if w >= v {
+                break;
+            }
+            let kw = free_index[w as usize];
+            if kw != PINNED {
+                row_idx.push(kw);
+            }
+        }
+        row_idx.push(k as u32);
+        col_ptr.push(row_idx.len() as u32);
+    }
+    let mut values = vec![[0.0f64; 2]; row_idx.len()];
+    let mut rhs = vec![[0.0f64; 2]; f];
+    // The UV of each pinned vertex (the last pin wins, as in `LscmSystem::assemble`).
+    let mut pin_uv = vec![[0.0f64; 2]; n];
+    for pin in pins {
+        pin_uv[pin.vertex as usize] = pin.uv;
+    }
+    let uv_of_pin = |v: u32| pin_uv[v as usize];
+    for t in &chart.triangles {
+        let p = t.map(|i| chart.positions_m[i as usize]);
+        let (w, d_t) = triangle_coefficients(p);
+        let s = 1.0 / d_t.sqrt();
+        let m = w.map(|c| [c[0] * s, c[1] * s]);
+        let k = t.map(|i| free_index[i as usize]);
+        for a in 0..3 {
+            if k[a] == PINNED {
+                continue;
+            }
+            for b in 0..3 {
+                // c = conj(m_a)·m_b, the entry (a, b) of 𝒞.
+                let re = m[a][0] * m[b][0] + m[a][1] * m[b][1];
+                let im = m[a][0] * m[b][1] - m[a][1] * m[b][0];
+                if k[b] == PINNED {
+                    let z = uv_of_pin(t[b]);
+                    let r = &mut rhs[k[a] as usize];
+                    r[0] -= re * z[0] - im * z[1];
+                    r[1] -= im * z[0] + re * z[1];
+                } else if k[a] <= k[b] {
+                    let col = k[b] as usize;
+                    let (lo, hi) = (col_ptr[col] as usize, col_ptr[col + 1] as usize);
+                    let pos = row_idx[lo..hi]
+                        .iter()
+                        .position(|&r| r == k[a])
+                        .ok_or_else(|| ParameterizeError::Internal {
+                            detail: "LSCM sparsity pattern misses a triangle edge".to_string(),
+                        })?;
+                    values[lo + pos][0] += re;
+                    values[lo + pos][1] += im;
+                }
+            }
+        }
+    }
+    let x = if f == 0 {
+        Vec::new()
+    } else {
+        let factor = HermitianCholesky::factor_upper(f, &col_ptr, &row_idx, &values)
+            .map_err(ParameterizeError::Direct)?;
+        factor.solve(&rhs).map_err(ParameterizeError::Direct)?
+    };
+    let mut uv = vec![[0.0; 2]; n];
+    for (&v, z) in free_vertices.iter().zip(x) {
+        uv[v as usize] = z;
+    }
+    for pin in pins {
+        uv[pin.vertex as usize] = pin.uv;
+    }
+    Ok(uv)
+}
+
+/// The topology is a public struct: check it belongs to this chart before indexing.
+fn topology_fits(chart: &ChartMesh, topology: &ChartTopology) -> bool {
+    let n = chart.positions_m.len();
+    topology.neighbor_ptr.len() == n + 1
+        && topology.neighbor_ptr.last() == Some(&topology.neighbors.len())
+        && topology.neighbor_ptr.windows(2).all(|w| w[0] <= w[1])
+        && topology.neighbors.iter().all(|&w| (w as usize) < n)
+        && chart
+            .triangles
+            .iter()
+            .all(|t| t.iter().all(|&i| (i as usize) < n))
+}
+
+fn foreign_topology() -> ParameterizeError {
+    ParameterizeError::Internal {
+        detail: "topology does not belong to this chart; use ChartMesh::validate".to_string(),
     }
 }
 
@@ -556,6 +675,58 @@ mod tests {
         for (a, b) in uv.iter().zip(&uv_cg) {
             assert!((a[0] - b[0]).abs() < 1e-6 && (a[1] - b[1]).abs() < 1e-6);
         }
+    }
+
+    #[test]
+    fn complex_direct_solve_equals_the_real_normal_equations() {
+        for chart in [
+            hemisphere(16, 6),
+            noisy_height_field(14, 0.7, 9),
+            open_cylinder(16, 5, true),
+            grid(9, 7, |x, y| [x, y, 0.15 * (x - 4.5) * (y - 3.5)]),
+        ] {
+            let topo = chart.validate().expect("disk");
+            let pins = diameter_pins(&chart, &topo);
+            let sys = LscmSystem::assemble(&chart, &topo, &pins).expect("assemble");
+            let uv_real = sys.uv_from_solution(&sys.solve_direct().expect("solve"));
+            let uv = solve_direct_complex(&chart, &topo, &pins).expect("solve");
+            let scale = uv_real
+                .iter()
+                .map(|p| p[0].abs().max(p[1].abs()))
+                .fold(0.0, f64::max);
+            assert!(scale > 0.0);
+            for (a, b) in uv.iter().zip(&uv_real) {
+                assert!(
+                    (a[0] - b[0]).abs() <= 1e-10 * scale && (a[1] - b[1]).abs() <= 1e-10 * scale,
+                    "{a:?} vs {b:?}"
+                );
+            }
+            for pin in &pins {
+                assert_eq!(uv[pin.vertex as usize], pin.uv);
+            }
+            // Same minimum (energies recomputed from the UVs; a developable chart has ~0).
+            let (e, e_real) = (
+                conformal_energy(&chart, &uv),
+                conformal_energy(&chart, &uv_real),
+            );
+            assert!(
+                (e - e_real).abs() <= 1e-9 * e_real + 1e-12 * scale * scale,
+                "{e} vs {e_real}"
+            );
+        }
+        // Errors, not panics.
+        let small = grid(2, 2, |x, y| [x, y, 0.0]);
+        let big = grid(4, 4, |x, y| [x, y, 0.0]);
+        let topo = small.validate().expect("disk");
+        let pins = diameter_pins(&small, &topo);
+        assert!(matches!(
+            solve_direct_complex(&big, &topo, &pins),
+            Err(ParameterizeError::Internal { .. })
+        ));
+        assert!(matches!(
+            solve_direct_complex(&small, &topo, &pins[..1]),
+            Err(ParameterizeError::BadPins { .. })
+        ));
     }
 
     #[test]

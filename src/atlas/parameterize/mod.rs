@@ -143,7 +143,8 @@ pub enum ParameterizeMethod {
     /// Direct below [`ParameterizeOptions::auto_hierarchical_min_vertices`], hierarchical above.
     #[default]
     Auto,
-    /// Sparse Cholesky on the normal equations (exact up to rounding).
+    /// Sparse Cholesky on the normal equations in complex Hermitian form (exact up to rounding;
+    /// `lscm::solve_direct_complex`).
     Direct,
     /// HLSCM: cascadic multigrid over a progressive mesh (hlscm-2003).
     Hierarchical,
@@ -230,7 +231,34 @@ pub fn parameterize_chart_with_monitor(
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
 ) -> Result<ChartMap, ParameterizeError> {
     let topology = chart.validate()?;
-    let pins = lscm::diameter_pins(chart, &topology);
+    flatten_validated(chart, &topology, options, monitor)
+}
+
+/// [`parameterize_chart`], also returning the chart's connectivity (computed once, by
+/// [`ChartMesh::validate`]), for callers that inspect the map further (chart validation reads
+/// the boundary loop).
+pub fn parameterize_chart_with_topology(
+    chart: &ChartMesh,
+    options: &ParameterizeOptions,
+) -> Result<(ChartMap, ChartTopology), ParameterizeError> {
+    let topology = chart.validate()?;
+    let map = flatten_validated(
+        chart,
+        &topology,
+        options,
+        &mut |_| ControlFlow::Continue(()),
+    )?;
+    Ok((map, topology))
+}
+
+/// The map of a chart that passed [`ChartMesh::validate`] (which gave `topology`).
+fn flatten_validated(
+    chart: &ChartMesh,
+    topology: &ChartTopology,
+    options: &ParameterizeOptions,
+    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
+) -> Result<ChartMap, ParameterizeError> {
+    let pins = lscm::diameter_pins(chart, topology);
     let method = match options.method {
         ParameterizeMethod::Auto => {
             if chart.positions_m.len() >= options.auto_hierarchical_min_vertices {
@@ -243,12 +271,11 @@ pub fn parameterize_chart_with_monitor(
     };
     let (uv, iterations, report) = match method {
         ParameterizeMethod::Direct | ParameterizeMethod::Auto => {
-            let system = LscmSystem::assemble(chart, &topology, &pins)?;
-            let x = system.solve_direct()?;
-            (system.uv_from_solution(&x), 0, None)
+            let uv = lscm::solve_direct_complex(chart, topology, &pins)?;
+            (uv, 0, None)
         }
         ParameterizeMethod::ConjugateGradient => {
-            let system = LscmSystem::assemble(chart, &topology, &pins)?;
+            let system = LscmSystem::assemble(chart, topology, &pins)?;
             let mut x = vec![0.0; system.unknowns()];
             let mut cancelled = false;
             let total = options.cg.max_iterations;
@@ -263,14 +290,14 @@ pub fn parameterize_chart_with_monitor(
             (system.uv_from_solution(&x), outcome.iterations, None)
         }
         ParameterizeMethod::Hierarchical => {
-            let (uv, report) =
-                hlscm::solve_hlscm(chart, &topology, &pins, &options.hlscm, monitor)?;
+            let (uv, report) = hlscm::solve_hlscm(chart, topology, &pins, &options.hlscm, monitor)?;
             (uv, report.finest_iterations, Some(report))
         }
     };
     if !uv.iter().all(|p| p[0].is_finite() && p[1].is_finite()) {
         return Err(ParameterizeError::NonFiniteResult);
     }
+
     Ok(ChartMap {
         conformal_energy: conformal_energy(chart, &uv),
         flipped_faces: flipped_faces(chart, &uv),
