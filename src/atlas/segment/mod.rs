@@ -36,6 +36,7 @@
 pub mod features;
 pub mod grow;
 pub mod options;
+pub mod sock;
 pub mod validate;
 
 #[cfg(test)]
@@ -267,7 +268,6 @@ pub(super) fn disk_check(
     let Some(&first) = faces.first() else {
         return Err(NotADisk::Empty);
     };
-    let glued_inside = |h: HalfedgeId| mesh.opposite(h).filter(|o| inside(o.face()));
     // Connected through glued edges.
     let reached = flood(mesh, &[first], inside, faces).len();
     if reached != faces.len() {
@@ -276,6 +276,17 @@ pub(super) fn disk_check(
             faces: faces.len(),
         });
     }
+    disk_check_connected(mesh, faces, inside)
+}
+
+/// [`disk_check`] for faces already known to be connected through glued edges (non-empty):
+/// the fan, Euler characteristic and boundary-loop tests only.
+fn disk_check_connected(
+    mesh: &TriangleMesh,
+    faces: &[FaceId],
+    inside: &dyn Fn(FaceId) -> bool,
+) -> Result<DiskInfo, NotADisk> {
+    let glued_inside = |h: HalfedgeId| mesh.opposite(h).filter(|o| inside(o.face()));
     // One fan per vertex: count the outgoing half-edges that start a run of chart faces in the
     // rotation (their predecessor, across `g`'s own edge, is outside or absent).
     let mut vertices: Vec<VertexId> = faces.iter().flat_map(|&f| mesh.face_vertices(f)).collect();
@@ -448,7 +459,8 @@ pub(super) fn enforce_disks(
             pending.push((a, in_comp));
             continue;
         }
-        if disk_check(mesh, &faces, &inside).is_ok() {
+        // `comp` covers `faces`: connected, so only the other disk tests remain.
+        if disk_check_connected(mesh, &faces, &inside).is_ok() {
             done.push(faces);
             continue;
         }
