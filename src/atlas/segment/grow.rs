@@ -28,8 +28,9 @@
 //! Departures, stated: the paper's `chart_boundaries` edge set, which lets a chart wrap around a
 //! cylinder and meet itself along a cut, is not kept: a chart here is a set of faces glued along
 //! every interior edge, so a chart that wraps around is an annulus and the disk guarantee in
-//! `mod.rs` splits it. Sock-shaped extremal cylinders are not detected or cut (no area/perimeter
-//! test yet): a capped cylinder is already a disk, only flatter to parameterize with the cut.
+//! `mod.rs` splits it. Sock-shaped extremal cylinders are not cut here: a capped cylinder is
+//! already a disk, and a seam inside a chart cannot be represented; when its map fails the
+//! validation's stretch bound it is split lengthwise over its tip instead (`sock.rs`).
 //!
 //! Invariants: every face gets exactly one chart; charts never span connected components (growth
 //! crosses glued edges only); the result is deterministic (heap ties broken by id, no hash maps).
