@@ -88,8 +88,24 @@ pub fn detect_features(mesh: &TriangleMesh, options: &Lscm2002Options) -> Featur
     let nh = mesh.num_halfedges();
     let mut sharpness_rad = vec![0.0; nh];
     let mut ranked: Vec<(f64, HalfedgeId)> = Vec::new();
+    // One normal per face, then the angle of `TriangleMesh::dihedral_angle_rad` (same formula,
+    // same bits) per edge: each normal is computed once instead of once per edge.
+    let normals: Vec<Option<[f64; 3]>> = mesh.faces().map(|f| mesh.face_normal(f)).collect();
+    let dihedral = |h: HalfedgeId, o: HalfedgeId| {
+        let n1 = normals[h.face().index()]?;
+        let n2 = normals[o.face().index()]?;
+        let c = [
+            n1[1] * n2[2] - n1[2] * n2[1],
+            n1[2] * n2[0] - n1[0] * n2[2],
+            n1[0] * n2[1] - n1[1] * n2[0],
+        ];
+        let d = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
+        Some((c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt().atan2(d))
+    };
     for h in mesh.edges() {
-        if let (Some(o), Some(a)) = (mesh.opposite(h), mesh.dihedral_angle_rad(h)) {
+        let Some(o) = mesh.opposite(h) else { continue };
+        if let Some(a) = dihedral(h, o) {
+            debug_assert_eq!(Some(a), mesh.dihedral_angle_rad(h));
             sharpness_rad[h.index()] = a;
             sharpness_rad[o.index()] = a;
             ranked.push((a, h));

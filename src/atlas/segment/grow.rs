@@ -28,8 +28,9 @@
 //! Departures, stated: the paper's `chart_boundaries` edge set, which lets a chart wrap around a
 //! cylinder and meet itself along a cut, is not kept: a chart here is a set of faces glued along
 //! every interior edge, so a chart that wraps around is an annulus and the disk guarantee in
-//! `mod.rs` splits it. Sock-shaped extremal cylinders are not detected or cut (no area/perimeter
-//! test yet): a capped cylinder is already a disk, only flatter to parameterize with the cut.
+//! `mod.rs` splits it. Sock-shaped extremal cylinders are not cut here: a capped cylinder is
+//! already a disk, and a seam inside a chart cannot be represented; when its map fails the
+//! validation's stretch bound it is split lengthwise over its tip instead (`sock.rs`).
 //!
 //! Invariants: every face gets exactly one chart; charts never span connected components (growth
 //! crosses glued edges only); the result is deterministic (heap ties broken by id, no hash maps).
@@ -94,6 +95,16 @@ impl PartialOrd for MaxEntry {
 /// Multi-source Dijkstra over the face graph from `sources` (face, initial distance), with
 /// centroid-to-centroid edge lengths. Unreached faces stay at `+∞`.
 fn face_dijkstra(mesh: &TriangleMesh, sources: &[(FaceId, f64)]) -> Vec<f64> {
+    let centroids: Vec<[f64; 3]> = mesh.faces().map(|f| centroid(mesh, f)).collect();
+    face_dijkstra_with(mesh, &centroids, sources)
+}
+
+/// [`face_dijkstra`] with the face centroids computed once by the caller (same result).
+fn face_dijkstra_with(
+    mesh: &TriangleMesh,
+    centroids: &[[f64; 3]],
+    sources: &[(FaceId, f64)],
+) -> Vec<f64> {
     let mut dist = vec![f64::INFINITY; mesh.num_faces()];
     let mut heap = BinaryHeap::new();
     for &(f, d) in sources {
@@ -108,9 +119,9 @@ fn face_dijkstra(mesh: &TriangleMesh, sources: &[(FaceId, f64)]) -> Vec<f64> {
         if d > dist[f.index()] {
             continue;
         }
-        let c = centroid(mesh, f);
+        let c = centroids[f.index()];
         for g in mesh.face_neighbors(f).into_iter().flatten() {
-            let nd = d + dist3(c, centroid(mesh, g));
+            let nd = d + dist3(c, centroids[g.index()]);
             if nd < dist[g.index()] {
                 dist[g.index()] = nd;
                 heap.push(MaxEntry { key: -nd, id: g.0 });
@@ -123,9 +134,10 @@ fn face_dijkstra(mesh: &TriangleMesh, sources: &[(FaceId, f64)]) -> Vec<f64> {
 /// Distance from each face to the nearest feature edge or mesh border, over the face graph (see
 /// the module doc), in model units; `+∞` for faces of a component without features and borders.
 pub fn distance_to_features(mesh: &TriangleMesh, features: &Features) -> Vec<f64> {
+    let centroids: Vec<[f64; 3]> = mesh.faces().map(|f| centroid(mesh, f)).collect();
     let mut sources = Vec::new();
     for f in mesh.faces() {
-        let c = centroid(mesh, f);
+        let c = centroids[f.index()];
         let mut best = f64::INFINITY;
         for h in mesh.face_halfedges(f) {
             if mesh.is_boundary_halfedge(h) || features.is_feature_edge(h) {
@@ -139,7 +151,7 @@ pub fn distance_to_features(mesh: &TriangleMesh, features: &Features) -> Vec<f64
             sources.push((f, best));
         }
     }
-    face_dijkstra(mesh, &sources)
+    face_dijkstra_with(mesh, &centroids, &sources)
 }
 
 /// The two ends of a (double-sweep) diameter of the face graph of the component holding `start`.

@@ -26,7 +26,8 @@
 //! Units: distances in model units (`_m`), angles in radians (`_rad`), counts of edges.
 //!
 //! Code map: [`options`] (every option, unit, default), [`features`] (§3.1, Algorithm 1),
-//! [`grow`] (§3.2, Algorithm 2), [`validate`] (§3.3: flatten every chart, split the invalid
+//! [`grow`] (§3.2, Algorithm 2), [`sock`] (§3.2 sock-shaped charts: the lengthwise split seeds
+//! the validation uses for an over-stretched chart squeezed at its tip), [`validate`] (§3.3: flatten every chart, split the invalid
 //! ones, merge back; [`validate_charts_with_monitor`] reports progress and can be cancelled;
 //! every chart leaves it with a map, zero-area faces included), this file (the disk guarantee,
 //! the chart-count cap, the [`ChartMesh`] extraction for the parameterizer).
@@ -36,6 +37,7 @@
 pub mod features;
 pub mod grow;
 pub mod options;
+pub mod sock;
 pub mod validate;
 
 #[cfg(test)]
@@ -267,7 +269,6 @@ pub(super) fn disk_check(
     let Some(&first) = faces.first() else {
         return Err(NotADisk::Empty);
     };
-    let glued_inside = |h: HalfedgeId| mesh.opposite(h).filter(|o| inside(o.face()));
     // Connected through glued edges.
     let reached = flood(mesh, &[first], inside, faces).len();
     if reached != faces.len() {
@@ -276,6 +277,17 @@ pub(super) fn disk_check(
             faces: faces.len(),
         });
     }
+    disk_check_connected(mesh, faces, inside)
+}
+
+/// [`disk_check`] for faces already known to be connected through glued edges (non-empty):
+/// the fan, Euler characteristic and boundary-loop tests only.
+fn disk_check_connected(
+    mesh: &TriangleMesh,
+    faces: &[FaceId],
+    inside: &dyn Fn(FaceId) -> bool,
+) -> Result<DiskInfo, NotADisk> {
+    let glued_inside = |h: HalfedgeId| mesh.opposite(h).filter(|o| inside(o.face()));
     // One fan per vertex: count the outgoing half-edges that start a run of chart faces in the
     // rotation (their predecessor, across `g`'s own edge, is outside or absent).
     let mut vertices: Vec<VertexId> = faces.iter().flat_map(|&f| mesh.face_vertices(f)).collect();
@@ -448,7 +460,8 @@ pub(super) fn enforce_disks(
             pending.push((a, in_comp));
             continue;
         }
-        if disk_check(mesh, &faces, &inside).is_ok() {
+        // `comp` covers `faces`: connected, so only the other disk tests remain.
+        if disk_check_connected(mesh, &faces, &inside).is_ok() {
             done.push(faces);
             continue;
         }

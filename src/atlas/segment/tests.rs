@@ -972,3 +972,116 @@ fn near_collinear_overlapping_segments_count_as_crossing() {
     // Clearly apart segments still do not.
     assert!(!validate::segments_intersect(a, b, [0.3, 0.2], [1.2, 0.5]));
 }
+
+/// A finger: a cylinder of radius `r_m` and length `length_m` along z (open at `z = −length_m`)
+/// closed at the top by a hemisphere ending in a pole vertex; `n_around` segments, `n_cyl`
+/// rings of quads on the cylinder and `n_cap` on the cap. A sock-shaped extremal cylinder
+/// (LSCM paper §3.2, Figure 5-B): a disk with one boundary loop (the rim).
+fn finger(n_around: u32, n_cyl: u32, n_cap: u32, r_m: f64, length_m: f64) -> MeshInput {
+    use std::f64::consts::PI;
+    let mut positions = Vec::new();
+    for i in 0..=n_cyl {
+        let z = -length_m + length_m * f64::from(i) / f64::from(n_cyl);
+        for j in 0..n_around {
+            let phi = 2.0 * PI * f64::from(j) / f64::from(n_around);
+            positions.push([r_m * phi.cos(), r_m * phi.sin(), z]);
+        }
+    }
+    for k in 1..n_cap {
+        let e = 0.5 * PI * f64::from(k) / f64::from(n_cap);
+        for j in 0..n_around {
+            let phi = 2.0 * PI * f64::from(j) / f64::from(n_around);
+            positions.push([
+                r_m * e.cos() * phi.cos(),
+                r_m * e.cos() * phi.sin(),
+                r_m * e.sin(),
+            ]);
+        }
+    }
+    let rings = n_cyl + n_cap;
+    let pole = rings * n_around;
+    positions.push([0.0, 0.0, r_m]);
+    let id = |i: u32, j: u32| i * n_around + j % n_around;
+    let mut tris = Vec::new();
+    for i in 0..rings - 1 {
+        for j in 0..n_around {
+            let (a, b, c, d) = (id(i, j), id(i, j + 1), id(i + 1, j + 1), id(i + 1, j));
+            tris.push([a, b, c]);
+            tris.push([a, c, d]);
+        }
+    }
+    for j in 0..n_around {
+        tris.push([id(rings - 1, j), id(rings - 1, j + 1), pole]);
+    }
+    MeshInput::single_group(positions, tris)
+}
+
+#[test]
+fn sock_chart_is_split_lengthwise_from_its_rim_into_two_flat_halves() {
+    let mesh = build(&finger(24, 12, 6, 1.0, 4.0));
+    let all: Vec<FaceId> = mesh.faces().collect();
+    check_chart_is_disk(&mesh, &all).expect("a finger is a disk");
+    let bound = ValidateOptions::default()
+        .max_stretch
+        .expect("a default bound");
+    let (cm, _) = chart_mesh(&mesh, &all);
+    let map = crate::atlas::parameterize::parameterize_chart(&cm, &Default::default())
+        .expect("a disk flattens");
+    let whole = chart_stretch(&cm, &map.uv);
+    assert!(
+        whole > 2.0 * bound,
+        "test premise: the whole sock is over-stretched ({whole})"
+    );
+    // The tip (a pole face) is the most squeezed face, a rim face the least.
+    let tip = *all.last().expect("faces");
+    let rim_face = all[0];
+    let inside = |_: FaceId| true;
+    let (a, b) = super::sock::stretch_split_seeds(&mesh, &all, &inside, rim_face, tip);
+    let on_rim = |f: FaceId| {
+        mesh.face_halfedges(f)
+            .into_iter()
+            .any(|h| mesh.opposite(h).is_none())
+    };
+    assert!(a != b && on_rim(a) && on_rim(b), "seeds {a:?} {b:?}");
+    let (half_a, half_b) = grow_two(&mesh, &all, &inside, a, b);
+    // Lengthwise: each half reaches the tip ring and holds about half the faces.
+    for half in [&half_a, &half_b] {
+        check_chart_is_disk(&mesh, half).expect("each half is a disk");
+        assert!(
+            half.len() * 5 > all.len() * 2,
+            "{} of {}",
+            half.len(),
+            all.len()
+        );
+        let (cm, _) = chart_mesh(&mesh, half);
+        let map = crate::atlas::parameterize::parameterize_chart(&cm, &Default::default())
+            .expect("a disk flattens");
+        let l2 = chart_stretch(&cm, &map.uv);
+        assert!(
+            l2 <= bound,
+            "half of {} faces has L2 {l2} (whole {whole})",
+            half.len()
+        );
+    }
+    // The whole validation: the sock leaves as at most two charts, each within the bound.
+    let seg = finish(&mesh, vec![all.clone()], SegmentStats::default());
+    let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid options");
+    assert_contract(&mesh, &v.segmentation);
+    assert_maps_contract(&mesh, &v);
+    assert!(
+        v.segmentation.num_charts() <= 2,
+        "{} charts, splits {:?}",
+        v.segmentation.num_charts(),
+        v.splits
+    );
+    for (c, m) in v.segmentation.charts.iter().zip(&v.maps) {
+        let (cm, _) = chart_mesh(&mesh, c);
+        let (map, _) = m.as_ref().expect("parameterized");
+        assert!(chart_stretch(&cm, &map.uv) <= bound + 1e-9);
+    }
+    // A chart whose most squeezed face is on its rim keeps the paper's seeds.
+    assert_eq!(
+        super::sock::stretch_split_seeds(&mesh, &all, &inside, tip, rim_face),
+        (tip, rim_face)
+    );
+}

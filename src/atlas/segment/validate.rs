@@ -795,10 +795,14 @@ fn split_for(
         ChartDefect::BoundaryOverlap { faces: [a, b] } => (*a, *b, Some(1)),
         ChartDefect::AreaRatio {
             min_face, max_face, ..
-        }
-        | ChartDefect::Stretch {
-            min_face, max_face, ..
         } => (*min_face, *max_face, Some(2)),
+        ChartDefect::Stretch {
+            min_face, max_face, ..
+        } => {
+            let (a, b) =
+                super::sock::stretch_split_seeds(mesh, faces, &inside, *min_face, *max_face);
+            (a, b, Some(2))
+        }
         ChartDefect::Unparameterizable(_) => {
             let (a, b) = diameter();
             (a, b, None)
