@@ -31,6 +31,11 @@
 //!   construction: bunny 29 charts at L2 1.027, armadillo 85 at 1.034 (one run, release).
 //!   [`ValidateOptions::paper`] restores the paper's test.
 //!
+//!   A chart over the stretch bound whose most squeezed face lies deep inside it (a sock-shaped
+//!   extremal cylinder, lscm-2002 §3.2) is not split tip-from-rim but lengthwise, from two
+//!   opposite rim faces ([`super::sock::stretch_split_seeds`]); with that, bunny 28 charts at
+//!   L2 1.022 and armadillo 74 at 1.037 (one run, release).
+//!
 //! - **fold at a vertex** ([`vertex_fold`]): a map with no flip and a simple boundary can still
 //!   fold where the UV angles around a vertex wrap past a full turn (≥ 4π at an interior vertex,
 //!   ≥ 2π at a boundary vertex, whose two boundary segments share an endpoint and so are not
