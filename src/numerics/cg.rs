@@ -124,9 +124,33 @@ pub fn solve_cg(
     solve_pcg(a, b, x, &Jacobi::new(a), options, monitor)
 }
 
-/// [`solve_cg`] with any symmetric positive definite preconditioner (Shewchuk §B3).
+/// A square linear operator `y = A·x` that CG can use: a [`CsrMatrix`], or any other storage of
+/// a symmetric positive definite matrix (e.g. HLSCM's 2 × 2 block form). `mul_vec_into` must be
+/// deterministic (the same bits at any thread count).
+pub trait LinearOperator: Sync {
+    /// Rows of `A`.
+    fn nrows(&self) -> usize;
+    /// Columns of `A` (CG needs `nrows() == ncols()`).
+    fn ncols(&self) -> usize;
+    /// `y = A·x`; errors on a length mismatch.
+    fn mul_vec_into(&self, x: &[f64], y: &mut [f64]) -> Result<(), SparseError>;
+}
+
+impl LinearOperator for CsrMatrix {
+    fn nrows(&self) -> usize {
+        CsrMatrix::nrows(self)
+    }
+    fn ncols(&self) -> usize {
+        CsrMatrix::ncols(self)
+    }
+    fn mul_vec_into(&self, x: &[f64], y: &mut [f64]) -> Result<(), SparseError> {
+        CsrMatrix::mul_vec_into(self, x, y)
+    }
+}
+
+/// [`solve_cg`] with any symmetric positive definite preconditioner and operator (Shewchuk §B3).
 pub fn solve_pcg(
-    a: &CsrMatrix,
+    a: &dyn LinearOperator,
     b: &[f64],
     x: &mut [f64],
     preconditioner: &dyn Preconditioner,
@@ -151,7 +175,8 @@ pub fn solve_pcg(
             converged: true,
         });
     }
-    let mut r = a.mul_vec(x)?;
+    let mut r = vec![0.0; n];
+    a.mul_vec_into(x, &mut r)?;
     r.par_iter_mut().zip(b).for_each(|(ri, bi)| *ri = bi - *ri);
     let mut z = vec![0.0; n];
     preconditioner.apply(&r, &mut z);

@@ -23,6 +23,8 @@ pub mod cg;
 pub mod sparse;
 pub mod sparse_cholesky;
 
-pub use cg::{solve_cg, solve_pcg, CgOptions, CgOutcome, CgStep, Jacobi, Preconditioner};
+pub use cg::{
+    solve_cg, solve_pcg, CgOptions, CgOutcome, CgStep, Jacobi, LinearOperator, Preconditioner,
+};
 pub use sparse::{CsrMatrix, SparseError, Triplet};
 pub use sparse_cholesky::{CholeskyError, HermitianCholesky, SparseCholesky};

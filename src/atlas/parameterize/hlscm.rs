@@ -68,9 +68,8 @@ use std::ops::ControlFlow;
 
 use rayon::prelude::*;
 
-use crate::numerics::sparse::dot;
 use crate::numerics::{
-    solve_pcg, CgOptions, CgOutcome, CgStep, CsrMatrix, Jacobi, Preconditioner, SparseCholesky,
+    solve_pcg, CgOptions, CsrMatrix, Jacobi, LinearOperator, Preconditioner, SparseCholesky,
     SparseError,
 };
 
@@ -616,83 +615,17 @@ impl VertexInterpolation {
     }
 }
 
-/// Preconditioned CG on a [`ComplexBlockMatrix`]: step for step
-/// [`crate::numerics::solve_pcg`] (Shewchuk §B3, same reductions, same order), with the block
-/// mat-vec in place of the scalar CSR one.
-fn solve_pcg_blocks(
-    a: &ComplexBlockMatrix,
-    b: &[f64],
-    x: &mut [f64],
-    preconditioner: &dyn Preconditioner,
-    options: &CgOptions,
-    monitor: &mut dyn FnMut(&CgStep<'_>) -> ControlFlow<()>,
-) -> Result<CgOutcome, SparseError> {
-    let n = a.unknowns();
-    for len in [b.len(), x.len()] {
-        if len != n {
-            return Err(SparseError::DimensionMismatch {
-                expected: n,
-                got: len,
-            });
-        }
+/// CG runs on the block form directly ([`crate::numerics::solve_pcg`]).
+impl LinearOperator for ComplexBlockMatrix {
+    fn nrows(&self) -> usize {
+        self.unknowns()
     }
-    let b_norm = dot(b, b).sqrt();
-    if b_norm == 0.0 {
-        x.iter_mut().for_each(|v| *v = 0.0);
-        return Ok(CgOutcome {
-            iterations: 0,
-            relative_residual: 0.0,
-            converged: true,
-        });
+    fn ncols(&self) -> usize {
+        self.unknowns()
     }
-    let mut r = vec![0.0; n];
-    a.mul_vec_into(x, &mut r)?;
-    r.par_iter_mut().zip(b).for_each(|(ri, bi)| *ri = bi - *ri);
-    let mut z = vec![0.0; n];
-    preconditioner.apply(&r, &mut z);
-    let mut p = z.clone();
-    let mut ap = vec![0.0; n];
-    let mut rz = dot(&r, &z);
-    let mut rel = dot(&r, &r).sqrt() / b_norm;
-    let mut iterations = 0;
-    while rel > options.tolerance && iterations < options.max_iterations {
-        a.mul_vec_into(&p, &mut ap)?;
-        let pap = dot(&p, &ap);
-        if pap.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-            // Breakdown: A is not positive definite along p (or p = 0). Stop honestly.
-            break;
-        }
-        let alpha = rz / pap;
-        x.par_iter_mut()
-            .zip(&p)
-            .for_each(|(xi, pi)| *xi += alpha * pi);
-        r.par_iter_mut()
-            .zip(&ap)
-            .for_each(|(ri, api)| *ri -= alpha * api);
-        preconditioner.apply(&r, &mut z);
-        let rz_new = dot(&r, &z);
-        let beta = rz_new / rz;
-        rz = rz_new;
-        p.par_iter_mut()
-            .zip(&z)
-            .for_each(|(pi, zi)| *pi = zi + beta * *pi);
-        iterations += 1;
-        rel = dot(&r, &r).sqrt() / b_norm;
-        let step = CgStep {
-            iteration: iterations,
-            relative_residual: rel,
-            x,
-            residual: &r,
-        };
-        if monitor(&step).is_break() {
-            break;
-        }
+    fn mul_vec_into(&self, x: &[f64], y: &mut [f64]) -> Result<(), SparseError> {
+        ComplexBlockMatrix::mul_vec_into(self, x, y)
     }
-    Ok(CgOutcome {
-        iterations,
-        relative_residual: rel,
-        converged: rel <= options.tolerance,
-    })
 }
 
 /// The additive multilevel preconditioner for level `top` of the hierarchy.
@@ -816,7 +749,7 @@ impl HlscmHierarchy {
                         &cg,
                         &mut watch,
                     ),
-                    HlscmSmoother::Multilevel => solve_pcg_blocks(
+                    HlscmSmoother::Multilevel => solve_pcg(
                         &level.blocks,
                         level.system.rhs(),
                         &mut x,
