@@ -167,22 +167,7 @@ fn bad_options_and_files_fail_with_a_clear_message() {
 
 /// A GLB of a generated torus (several charts, enough work for rayon to split).
 fn torus_glb() -> Vec<u8> {
-    let input = texatlas::mesh::fixtures::torus(48, 24, 2.0, 0.6);
-    let mut b = gltf_common::Builder::new();
-    let positions: Vec<[f32; 3]> = input
-        .positions_m
-        .iter()
-        .map(|p| p.map(|x| x as f32))
-        .collect();
-    let pos = b.floats(&positions);
-    let idx: Vec<u32> = input.triangles.iter().flatten().copied().collect();
-    let ind = b.indices(&idx);
-    b.push(
-        "meshes",
-        serde_json::json!({"primitives": [{"attributes": {"POSITION": pos}, "indices": ind}]}),
-    );
-    b.push("nodes", serde_json::json!({"mesh": 0}));
-    b.glb()
+    gltf_common::glb_of_meshes(&[texatlas::mesh::fixtures::torus(48, 24, 2.0, 0.6)])
 }
 
 #[test]

@@ -22,7 +22,7 @@ mod tools_common;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use serde_json::{json, Value};
+use serde_json::Value;
 use texatlas::atlas::measure::{measure_atlas, AtlasReport, MeasureInput};
 use texatlas::gltf_io::{decode, encode, DecodeLimits, EncodeOptions, Resources};
 use texatlas::mesh::{fixtures, FaceId, MeshInput, TriangleMesh};
@@ -118,29 +118,6 @@ fn test_uvs(mesh: &TriangleMesh) -> Vec<[[f32; 2]; 3]> {
         }
     }
     uvs
-}
-
-/// A GLB with one glTF mesh (one triangle primitive) per part.
-fn glb_of(parts: &[MeshInput]) -> Vec<u8> {
-    let mut b = gltf_common::Builder::new();
-    let mut nodes = Vec::new();
-    for part in parts {
-        let pos: Vec<[f32; 3]> = part
-            .positions_m
-            .iter()
-            .map(|p| p.map(|x| x as f32))
-            .collect();
-        let pa = b.floats(&pos);
-        let idx: Vec<u32> = part.triangles.iter().flatten().copied().collect();
-        let ia = b.indices(&idx);
-        let m = b.push(
-            "meshes",
-            json!({"primitives": [{"attributes": {"POSITION": pa}, "indices": ia, "mode": 4}]}),
-        );
-        nodes.push(b.push("nodes", json!({ "mesh": m })));
-    }
-    b.push("scenes", json!({ "nodes": nodes }));
-    b.glb()
 }
 
 /// One comparison: our value, the evaluator's (by JSON pointer).
@@ -481,7 +458,12 @@ fn measure_agrees_with_the_evaluator_on_fixtures_and_generated_meshes() {
         ("gen_two_components", vec![fixtures::two_components()]),
     ];
     for (name, parts) in generated {
-        assets.push((format!("{name}.glb"), glb_of(&parts), 256, false));
+        assets.push((
+            format!("{name}.glb"),
+            gltf_common::glb_of_meshes(&parts),
+            256,
+            false,
+        ));
     }
     run_all("fixtures", assets, &evaluator);
 }

@@ -15,22 +15,7 @@ use serde_json::{json, Value};
 
 /// A GLB of a generated torus, no UVs (`mesh::fixtures::torus`).
 fn torus_glb() -> Vec<u8> {
-    let input = texatlas::mesh::fixtures::torus(48, 24, 2.0, 0.6);
-    let mut b = gltf_common::Builder::new();
-    let positions: Vec<[f32; 3]> = input
-        .positions_m
-        .iter()
-        .map(|p| p.map(|x| x as f32))
-        .collect();
-    let pos = b.floats(&positions);
-    let idx: Vec<u32> = input.triangles.iter().flatten().copied().collect();
-    let ind = b.indices(&idx);
-    b.push(
-        "meshes",
-        json!({"primitives": [{"attributes": {"POSITION": pos}, "indices": ind}]}),
-    );
-    b.push("nodes", json!({"mesh": 0}));
-    b.glb()
+    gltf_common::glb_of_meshes(&[texatlas::mesh::fixtures::torus(48, 24, 2.0, 0.6)])
 }
 
 /// The triangles of `primitives` (`(mesh, primitive)` of `doc`) as one non-indexed primitive

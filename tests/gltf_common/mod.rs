@@ -528,3 +528,27 @@ pub fn kitchen_sink() -> Builder {
     b.json["extras"] = extras("root");
     b
 }
+
+/// A GLB with one glTF mesh (one indexed triangle primitive, POSITION only) per part, one node
+/// per mesh.
+pub fn glb_of_meshes(parts: &[texatlas::mesh::MeshInput]) -> Vec<u8> {
+    let mut b = Builder::new();
+    let mut nodes = Vec::new();
+    for part in parts {
+        let pos: Vec<[f32; 3]> = part
+            .positions_m
+            .iter()
+            .map(|p| p.map(|x| x as f32))
+            .collect();
+        let pa = b.floats(&pos);
+        let idx: Vec<u32> = part.triangles.iter().flatten().copied().collect();
+        let ia = b.indices(&idx);
+        let m = b.push(
+            "meshes",
+            json!({"primitives": [{"attributes": {"POSITION": pa}, "indices": ia, "mode": 4}]}),
+        );
+        nodes.push(b.push("nodes", json!({ "mesh": m })));
+    }
+    b.push("scenes", json!({ "nodes": nodes }));
+    b.glb()
+}
