@@ -241,7 +241,7 @@ pub struct QualityJson {
     pub flipped: usize,
     /// Mirrored charts (orientation opposite to the atlas majority; not flips).
     pub charts_minority_orientation: usize,
-    /// Corners outside [0,1] (1e-6 tolerance).
+    /// Corners outside \[0,1\] (1e-6 tolerance).
     pub out_of_range_corners: usize,
     /// Faces with such a corner.
     pub out_of_range_triangles: usize,

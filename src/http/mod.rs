@@ -6,7 +6,7 @@
 //!
 //! # Invariants
 //! - Every error is an [`ApiError`] → `application/problem+json` with a stable `code`.
-//! - Handlers never log. The [`log_requests`] middleware gives every request an id (the
+//! - Handlers never log. The `log_requests` middleware gives every request an id (the
 //!   client's `x-request-id` when it is sane, else a new UUID), runs it in a `request` span
 //!   (`request_id`, `method`, `route`, and `job_id` once a handler knows it), logs one line per
 //!   request, records the latency metric and echoes `x-request-id`.

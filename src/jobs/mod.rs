@@ -6,9 +6,9 @@
 //!   blocking pool, store the input blobs, insert the queued job), read, list, cancel or delete,
 //!   fetch results, watch for changes. Owner checks happen here: a job of another owner is
 //!   reported as absent.
-//! - [`WorkerPool`]: N workers, each claiming one job at a time from the [`JobStore`] and running
-//!   the [`Processor`] on tokio's blocking pool, plus one sweeper (expired leases back to the
-//!   queue, expired results deleted).
+//! - [`WorkerPool`]: N workers, each claiming one job at a time from the
+//!   [`JobStore`](crate::storage::JobStore) and running the [`Processor`] on tokio's blocking
+//!   pool, plus one sweeper (expired leases back to the queue, expired results deleted).
 //! - [`Processor`]: the work of one job. Production: [`UnwrapProcessor`]
 //!   (`gltf_io::decode` → `unwrap::unwrap_asset` → encode both containers + report + preview);
 //!   tests inject fakes so the queue can be tested without the pipeline's cost.

@@ -60,8 +60,9 @@ impl Default for JobsConfig {
     }
 }
 
-/// One uploaded part, streamed to a file in [`JobService::spool_dir`]. The file is removed
-/// when the part is dropped unless it was moved into the blob store.
+/// One uploaded part, streamed to a file in the service's spool directory (the `spool_dir` of
+/// `JobService::new`). The file is removed when the part is dropped unless it was moved into
+/// the blob store.
 #[derive(Debug)]
 pub struct SpooledPart {
     /// The spool file.
