@@ -47,14 +47,7 @@ async fn corpus_assets_through_the_service() {
         )
         .await;
         assert_eq!(done["status"], "succeeded", "{name}: {done:#}");
-        let glb = c
-            .get(s.url(&format!("/v1/jobs/{id}/result")))
-            .send()
-            .await
-            .unwrap()
-            .bytes()
-            .await
-            .unwrap();
+        let glb = get_bytes(&c, s.url(&format!("/v1/jobs/{id}/result"))).await;
         let asset = texatlas::gltf_io::decode(
             &glb,
             &texatlas::gltf_io::Resources::new(),
@@ -66,14 +59,7 @@ async fn corpus_assets_through_the_service() {
             done["triangles"].as_u64().unwrap(),
             "{name}"
         );
-        let report: Value = c
-            .get(s.url(&format!("/v1/jobs/{id}/report")))
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
+        let report: Value = get_json(&c, s.url(&format!("/v1/jobs/{id}/report"))).await;
         assert_schema("Report", &report);
         assert_eq!(report["quality"]["flipped"], 0, "{name}");
         if let (Some(_), Some(eval)) = (

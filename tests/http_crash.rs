@@ -66,7 +66,7 @@ async fn kill_9_while_running_then_restart_finishes_every_job_once() {
         let c = c.clone();
         let url = format!("{base}/v1/jobs?status={status}");
         async move {
-            let list: Value = c.get(url).send().await.unwrap().json().await.unwrap();
+            let list: Value = get_json(&c, url).await;
             list["jobs"].as_array().unwrap().len()
         }
     };
@@ -89,14 +89,7 @@ async fn kill_9_while_running_then_restart_finishes_every_job_once() {
     let mut attempts = Vec::new();
     for id in &ids {
         let job = loop {
-            let job: Value = c
-                .get(format!("{base}/v1/jobs/{id}"))
-                .send()
-                .await
-                .unwrap()
-                .json()
-                .await
-                .unwrap();
+            let job: Value = get_json(&c, format!("{base}/v1/jobs/{id}")).await;
             if is_terminal(&job) {
                 break job;
             }
@@ -105,27 +98,13 @@ async fn kill_9_while_running_then_restart_finishes_every_job_once() {
         };
         assert_eq!(job["status"], "succeeded", "{job:#}");
         attempts.push(job["attempts"].as_u64().unwrap());
-        let glb = c
-            .get(format!("{base}/v1/jobs/{id}/result"))
-            .send()
-            .await
-            .unwrap()
-            .bytes()
-            .await
-            .unwrap();
+        let glb = get_bytes(&c, format!("{base}/v1/jobs/{id}/result")).await;
         assert!(glb.starts_with(b"glTF"));
     }
     // The job killed mid-run ran again.
     assert!(attempts.iter().any(|a| *a >= 2), "attempts {attempts:?}");
     // Exactly the 5 jobs, each once.
-    let list: Value = c
-        .get(format!("{base}/v1/jobs?limit=100"))
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let list: Value = get_json(&c, format!("{base}/v1/jobs?limit=100")).await;
     let mut listed: Vec<String> = list["jobs"]
         .as_array()
         .unwrap()

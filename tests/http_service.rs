@@ -201,14 +201,7 @@ async fn idempotency_key_replays_the_same_job() {
     let other = send("k-1", grid_glb(3)).await.unwrap();
     assert_problem(other, 422, "idempotency_key_reused").await;
     // Exactly one job exists.
-    let list: Value = c
-        .get(s.url("/v1/jobs"))
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let list: Value = get_json(&c, s.url("/v1/jobs")).await;
     assert_eq!(list["jobs"].as_array().unwrap().len(), 1);
     s.stop().await.unwrap();
 }
@@ -225,7 +218,7 @@ async fn list_is_newest_first_with_cursor_pages_and_status_filter() {
     let mut seen = Vec::new();
     let mut url = s.url("/v1/jobs?limit=3");
     loop {
-        let page: Value = c.get(&url).send().await.unwrap().json().await.unwrap();
+        let page: Value = get_json(&c, &url).await;
         assert_schema("JobList", &page);
         for j in page["jobs"].as_array().unwrap() {
             seen.push(j["id"].as_str().unwrap().to_string());
@@ -240,23 +233,9 @@ async fn list_is_newest_first_with_cursor_pages_and_status_filter() {
     for id in &ids {
         wait_done(&c, &s, id).await;
     }
-    let ok: Value = c
-        .get(s.url("/v1/jobs?status=succeeded&limit=100"))
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let ok: Value = get_json(&c, s.url("/v1/jobs?status=succeeded&limit=100")).await;
     assert_eq!(ok["jobs"].as_array().unwrap().len(), 7);
-    let queued: Value = c
-        .get(s.url("/v1/jobs?status=queued"))
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let queued: Value = get_json(&c, s.url("/v1/jobs?status=queued")).await;
     assert_eq!(queued["jobs"], json!([]));
     for bad in [
         "?status=done",
@@ -372,14 +351,7 @@ async fn events_arrive_in_order_and_end_with_the_job() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn cancel_while_running_and_while_queued() {
-    let s = Server::start_with(
-        Arc::new(Fake {
-            steps: 1,
-            step: Duration::from_millis(1),
-        }),
-        |c| c.jobs.workers = 1,
-    )
-    .await;
+    let s = Server::start_with(Fake::instant(), |c| c.jobs.workers = 1).await;
     let c = client();
     let q = format!("?max_charts={UNTIL_CANCELLED}");
     let running = submit_ok(&c, &s, fixture("Box.glb"), &q).await;
@@ -410,13 +382,9 @@ async fn cancel_while_running_and_while_queued() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn panics_and_time_limits_fail_the_job_and_the_server_lives_on() {
-    let s = Server::start_with(
-        Arc::new(Fake {
-            steps: 1,
-            step: Duration::from_millis(1),
-        }),
-        |c| c.jobs.job_time_limit = Some(Duration::from_millis(800)),
-    )
+    let s = Server::start_with(Fake::instant(), |c| {
+        c.jobs.job_time_limit = Some(Duration::from_millis(800))
+    })
     .await;
     let c = client();
     let boom = submit_ok(&c, &s, fixture("Box.glb"), &format!("?max_charts={PANIC}")).await;
@@ -436,14 +404,7 @@ async fn panics_and_time_limits_fail_the_job_and_the_server_lives_on() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn bad_requests_are_problems_with_the_right_status() {
-    let s = Server::start_with(
-        Arc::new(Fake {
-            steps: 1,
-            step: Duration::from_millis(1),
-        }),
-        |c| c.http.max_upload_bytes = 4096,
-    )
-    .await;
+    let s = Server::start_with(Fake::instant(), |c| c.http.max_upload_bytes = 4096).await;
     let c = client();
     // 413: declared and streamed (chunked, no Content-Length).
     let r = submit_glb(&c, &s, vec![0u8; 5000], "").await;
@@ -519,14 +480,7 @@ async fn bad_requests_are_problems_with_the_right_status() {
     let r = c.get(s.url("/v1/jobs/..%2F..%2Fetc")).send().await.unwrap();
     assert_problem(r, 404, "job_not_found").await;
     // Nothing was queued by any of these.
-    let list: Value = c
-        .get(s.url("/v1/jobs"))
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let list: Value = get_json(&c, s.url("/v1/jobs")).await;
     assert_eq!(list["jobs"], json!([]));
     // Spool files of refused uploads are gone.
     let spool: Vec<_> = std::fs::read_dir(s.data_dir().join("spool"))
@@ -594,13 +548,9 @@ async fn hostile_buffer_uris_are_refused_without_opening_anything() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn api_keys_isolate_owners() {
-    let s = Server::start_with(
-        Arc::new(Fake {
-            steps: 1,
-            step: Duration::from_millis(1),
-        }),
-        |c| c.http.api_keys = vec!["key-alpha".into(), "key-beta".into()],
-    )
+    let s = Server::start_with(Fake::instant(), |c| {
+        c.http.api_keys = vec!["key-alpha".into(), "key-beta".into()]
+    })
     .await;
     let c = client();
     let r = submit_glb(&c, &s, fixture("Box.glb"), "").await;
@@ -673,16 +623,10 @@ async fn api_keys_isolate_owners() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_full_queue_answers_503_with_retry_after() {
-    let s = Server::start_with(
-        Arc::new(Fake {
-            steps: 1,
-            step: Duration::from_millis(1),
-        }),
-        |c| {
-            c.jobs.workers = 1;
-            c.jobs.queue_capacity = Some(2);
-        },
-    )
+    let s = Server::start_with(Fake::instant(), |c| {
+        c.jobs.workers = 1;
+        c.jobs.queue_capacity = Some(2);
+    })
     .await;
     let c = client();
     let q = format!("?max_charts={UNTIL_CANCELLED}");
@@ -736,14 +680,7 @@ async fn operational_endpoints_and_the_openapi_contract() {
             "/v1/jobs/{id}/result",
         ]
     );
-    let health: Value = c
-        .get(s.url("/healthz"))
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let health: Value = get_json(&c, s.url("/healthz")).await;
     assert_schema("Status", &health);
     let ready = c.get(s.url("/readyz")).send().await.unwrap();
     assert_eq!(ready.status().as_u16(), 200);
@@ -777,13 +714,9 @@ async fn operational_endpoints_and_the_openapi_contract() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn cors_when_configured() {
-    let s = Server::start_with(
-        Arc::new(Fake {
-            steps: 1,
-            step: Duration::from_millis(1),
-        }),
-        |c| c.http.cors_origins = vec!["https://dash.example".into()],
-    )
+    let s = Server::start_with(Fake::instant(), |c| {
+        c.http.cors_origins = vec!["https://dash.example".into()]
+    })
     .await;
     let c = client();
     let r = c
@@ -811,17 +744,11 @@ async fn graceful_shutdown_requeues_running_jobs_and_a_restart_finishes_them() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
     let d1 = data.clone();
-    let s = Server::start_with(
-        Arc::new(Fake {
-            steps: 1,
-            step: Duration::from_millis(1),
-        }),
-        move |c| {
-            c.data_dir = d1;
-            c.jobs.workers = 1;
-            c.shutdown_grace = Duration::from_millis(200);
-        },
-    )
+    let s = Server::start_with(Fake::instant(), move |c| {
+        c.data_dir = d1;
+        c.jobs.workers = 1;
+        c.shutdown_grace = Duration::from_millis(200);
+    })
     .await;
     let c = client();
     let job = submit_ok(
@@ -838,14 +765,7 @@ async fn graceful_shutdown_requeues_running_jobs_and_a_restart_finishes_them() {
     .await;
     s.stop().await.unwrap();
     // Same data dir, a processor that finishes: the job was given back, not lost or failed.
-    let s = Server::start_with(
-        Arc::new(Fake {
-            steps: 1,
-            step: Duration::from_millis(1),
-        }),
-        move |c| c.data_dir = data,
-    )
-    .await;
+    let s = Server::start_with(Fake::instant(), move |c| c.data_dir = data).await;
     // The restarted job has UNTIL_CANCELLED options; cancel it and check it was back in play.
     let url = s.url(&format!("/v1/jobs/{id}"));
     let j = poll_until(&c, &url, DEADLINE, |j| j["status"] == "running").await;
@@ -875,14 +795,7 @@ async fn real_pipeline_unwraps_fixtures_end_to_end() {
         let id = job["id"].as_str().unwrap();
         let done = wait_done(&c, &s, id).await;
         assert_eq!(done["status"], "succeeded", "{name}: {done:#}");
-        let glb = c
-            .get(s.url(&format!("/v1/jobs/{id}/result")))
-            .send()
-            .await
-            .unwrap()
-            .bytes()
-            .await
-            .unwrap();
+        let glb = get_bytes(&c, s.url(&format!("/v1/jobs/{id}/result"))).await;
         // The result decodes again and keeps every triangle.
         let asset = texatlas::gltf_io::decode(
             &glb,
@@ -909,24 +822,10 @@ async fn real_pipeline_unwraps_fixtures_end_to_end() {
             &texatlas::gltf_io::DecodeLimits::default(),
         )
         .unwrap_or_else(|e| panic!("{name}: .gltf result does not decode: {e}"));
-        let report: Value = c
-            .get(s.url(&format!("/v1/jobs/{id}/report")))
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
+        let report: Value = get_json(&c, s.url(&format!("/v1/jobs/{id}/report"))).await;
         assert_schema("Report", &report);
         assert_eq!(report["quality"]["flipped"], 0, "{name}");
-        let png = c
-            .get(s.url(&format!("/v1/jobs/{id}/preview.png")))
-            .send()
-            .await
-            .unwrap()
-            .bytes()
-            .await
-            .unwrap();
+        let png = get_bytes(&c, s.url(&format!("/v1/jobs/{id}/preview.png"))).await;
         assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"), "{name}");
     }
     s.stop().await.unwrap();
@@ -934,14 +833,7 @@ async fn real_pipeline_unwraps_fixtures_end_to_end() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn finished_jobs_expire_and_the_sweeper_deletes_them_with_their_files() {
-    let s = Server::start_with(
-        Arc::new(Fake {
-            steps: 1,
-            step: Duration::from_millis(1),
-        }),
-        |c| c.jobs.retention = Duration::ZERO,
-    )
-    .await;
+    let s = Server::start_with(Fake::instant(), |c| c.jobs.retention = Duration::ZERO).await;
     let c = client();
     let job = submit_ok(&c, &s, fixture("Box.glb"), "").await;
     let id = job["id"].as_str().unwrap();
@@ -966,13 +858,9 @@ async fn finished_jobs_expire_and_the_sweeper_deletes_them_with_their_files() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_triangle_limit_refuses_big_assets() {
-    let s = Server::start_with(
-        Arc::new(Fake {
-            steps: 1,
-            step: Duration::from_millis(1),
-        }),
-        |c| c.jobs.decode_limits.max_triangles = Some(10),
-    )
+    let s = Server::start_with(Fake::instant(), |c| {
+        c.jobs.decode_limits.max_triangles = Some(10)
+    })
     .await;
     let c = client();
     let r = submit_glb(&c, &s, fixture("Box.glb"), "").await;

@@ -48,6 +48,16 @@ pub struct Fake {
     pub step: Duration,
 }
 
+impl Fake {
+    /// One 1 ms step per stage: for tests about the service, not about progress.
+    pub fn instant() -> Arc<dyn Processor> {
+        Arc::new(Fake {
+            steps: 1,
+            step: Duration::from_millis(1),
+        })
+    }
+}
+
 impl Processor for Fake {
     fn process(
         &self,
@@ -163,6 +173,31 @@ impl Server {
     pub fn data_dir(&self) -> PathBuf {
         self.dir.path().join("data")
     }
+}
+
+/// `GET url`'s body; panics on a transport error (any status is returned).
+pub async fn get_bytes(client: &reqwest::Client, url: impl reqwest::IntoUrl) -> Vec<u8> {
+    client
+        .get(url)
+        .send()
+        .await
+        .expect("GET")
+        .bytes()
+        .await
+        .expect("body")
+        .to_vec()
+}
+
+/// `GET url`'s body as JSON; panics on a transport error or a body that is not JSON.
+pub async fn get_json(client: &reqwest::Client, url: impl reqwest::IntoUrl) -> Value {
+    client
+        .get(url)
+        .send()
+        .await
+        .expect("GET")
+        .json()
+        .await
+        .expect("JSON body")
 }
 
 /// Polls `GET url` until `done(json)` or the deadline; the last body.
