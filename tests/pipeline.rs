@@ -231,3 +231,28 @@ fn invalid_options_fail_before_any_work() {
     }
     assert!(p.calls.is_empty(), "no stage may start: {:?}", p.calls);
 }
+
+#[test]
+fn a_long_strip_is_cut_when_that_raises_packing() {
+    // A flat 32 × 2 strip: one chart of aspect 16 fills about 1/16 of a square page. The
+    // packing-aware step of `generate` cuts it (each cut kept only if it raises the packing by
+    // at least 0.02), so the atlas packs much better, still with one texel density, no flip and
+    // no stretch (flat pieces of a plane).
+    let mesh = TriangleMesh::build(&fixtures::grid(32, 2))
+        .expect("builds")
+        .mesh;
+    let atlas = generate(&mesh, &AtlasOptions::default(), &mut NoProgress).expect("atlas");
+    assert!(atlas.stats.packing_cuts >= 1, "{:?}", atlas.stats);
+    assert_eq!(atlas.chart_page.len(), 1 + atlas.stats.packing_cuts);
+    assert!(
+        atlas.report.packing_efficiency > 2.0 / 16.0,
+        "cutting the strip should at least double the packing: {}",
+        atlas.report.packing_efficiency
+    );
+    assert_eq!(atlas.report.flipped, 0);
+    assert!(atlas
+        .report
+        .stretch
+        .l2
+        .is_some_and(|l2| (l2 - 1.0).abs() < 1e-4));
+}

@@ -24,6 +24,13 @@
 //!    opposite face is in another chart merges the two charts when they meet within
 //!    ε = `merge_epsilon_fraction · maxdist` of both charts' largest distance, i.e. near both
 //!    seeds. Charts seeded by the diameter rule never merge (that would undo the split).
+//!    Additions at **hard edges** (creases of at least `hard_edge_angle_rad`, `features.rs`), for
+//!    coarse and CAD meshes, where a face next to a crease can be as far from it as any face:
+//!    half-edges on a hard edge are taken only after every other half-edge (a chart crosses a
+//!    crease only where no other chart reaches), charts never merge across a hard edge, a plateau
+//!    of maxima never extends across one, and the local-maximum test compares a face only with
+//!    the faces on its side of the hard edges at each vertex (one seed per side). Without hard
+//!    edges all four rules are the paper's.
 //!
 //! Departures, stated: the paper's `chart_boundaries` edge set, which lets a chart wrap around a
 //! cylinder and meet itself along a cut, is not kept: a chart here is a set of faces glued along
@@ -90,6 +97,16 @@ impl PartialOrd for MaxEntry {
     fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
         Some(self.cmp(other))
     }
+}
+
+/// A growth heap entry: half-edges not on a hard edge (`open`) first, then [`MaxEntry`]
+/// order. A chart crosses a hard edge only once no chart can grow without crossing one, so on
+/// a coarse mesh (a 12-triangle cube, where every face touches a feature) each region between
+/// features is filled by its own seed first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+struct GrowEntry {
+    open: bool,
+    entry: MaxEntry,
 }
 
 /// Multi-source Dijkstra over the face graph from `sources` (face, initial distance), with
@@ -251,10 +268,44 @@ pub fn grow_charts(
     // Local maxima of the distance over the vertex one-ring of faces, one seed per plateau
     // (lowest face id).
     let mut visited = vec![false; nf];
+    // The faces compared are those of each vertex's fan on `f`'s side of any hard edge (the
+    // whole fan when the vertex has none): a face is not out-ranked by a larger face across a
+    // crease (a box whose sides differ in size still gets one seed per side).
     let is_local_max = |f: FaceId, key: &[f64]| {
-        mesh.face_vertices(f).into_iter().all(|v| {
-            mesh.outgoing_halfedges(v)
-                .all(|g| key[g.face().index()] <= key[f.index()])
+        let k = key[f.index()];
+        mesh.face_halfedges(f).into_iter().all(|g0| {
+            // `g0` leaves vertex `from(g0)`; rotate across `prev` (one way), then across `g`
+            // itself (the other way), stopping at a hard edge or the border.
+            let mut g = g0;
+            for _ in 0..mesh.num_halfedges() {
+                let e = g.prev();
+                if features.is_hard_edge(e) {
+                    break;
+                }
+                let Some(o) = mesh.opposite(e) else { break };
+                g = o;
+                if g == g0 {
+                    return true;
+                }
+                if key[g.face().index()] > k {
+                    return false;
+                }
+            }
+            let mut g = g0;
+            for _ in 0..mesh.num_halfedges() {
+                if features.is_hard_edge(g) {
+                    break;
+                }
+                let Some(o) = mesh.opposite(g) else { break };
+                g = o.next();
+                if g == g0 {
+                    break;
+                }
+                if key[g.face().index()] > k {
+                    return false;
+                }
+            }
+            true
         })
     };
     for f in mesh.faces() {
@@ -269,7 +320,15 @@ pub fn grow_charts(
         let mut stack = vec![f];
         visited[f.index()] = true;
         while let Some(g) = stack.pop() {
-            for n in mesh.face_neighbors(g).into_iter().flatten() {
+            // A plateau never extends across a feature edge: the regions on its two sides are
+            // separate charts (on a coarse cube every face is equally far from the edges).
+            for h in mesh.face_halfedges(g) {
+                if features.is_hard_edge(h) {
+                    continue;
+                }
+                let Some(n) = mesh.opposite(h).map(|o| o.face()) else {
+                    continue;
+                };
                 if !visited[n.index()] && key[n.index()] == k && is_local_max(n, &key) {
                     visited[n.index()] = true;
                     stack.push(n);
@@ -281,15 +340,19 @@ pub fn grow_charts(
         seeds.push(f);
     }
 
-    // Growing: the heap holds half-edges keyed by the distance of their face.
-    let mut heap: BinaryHeap<MaxEntry> = BinaryHeap::new();
-    let push_face = |f: FaceId, heap: &mut BinaryHeap<MaxEntry>, chart: &[u32]| {
+    // Growing: the heap holds half-edges keyed by the distance of their face; half-edges on a
+    // feature edge come after all others (`GrowEntry::open`).
+    let mut heap: BinaryHeap<GrowEntry> = BinaryHeap::new();
+    let push_face = |f: FaceId, heap: &mut BinaryHeap<GrowEntry>, chart: &[u32]| {
         for h in mesh.face_halfedges(f) {
             if let Some(o) = mesh.opposite(h) {
                 if chart[o.face().index()] != chart[f.index()] {
-                    heap.push(MaxEntry {
-                        key: key[f.index()],
-                        id: h.0,
+                    heap.push(GrowEntry {
+                        open: !features.is_hard_edge(h),
+                        entry: MaxEntry {
+                            key: key[f.index()],
+                            id: h.0,
+                        },
                     });
                 }
             }
@@ -299,7 +362,11 @@ pub fn grow_charts(
         push_face(s, &mut heap, &chart);
     }
     let mut num_merges = 0usize;
-    while let Some(MaxEntry { id, .. }) = heap.pop() {
+    while let Some(GrowEntry {
+        open,
+        entry: MaxEntry { id, .. },
+    }) = heap.pop()
+    {
         let h = HalfedgeId(id);
         let Some(o) = mesh.opposite(h) else { continue };
         let f = h.face();
@@ -313,7 +380,8 @@ pub fn grow_charts(
             continue;
         }
         let cg = charts.find(chart[g.index()]);
-        if cf == cg || !charts.mergeable[cf as usize] || !charts.mergeable[cg as usize] {
+        // Charts that meet on a hard edge never merge: that is where a border belongs.
+        if !open || cf == cg || !charts.mergeable[cf as usize] || !charts.mergeable[cg as usize] {
             continue;
         }
         let kf = key[f.index()];

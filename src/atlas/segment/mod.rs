@@ -489,7 +489,7 @@ pub(super) fn enforce_disks(
 /// Re-grows a connected chart (at least 2 faces) as two charts from the ends of a diameter of its
 /// face graph: breadth-first from both ends at once, one layer at a time, so both halves are
 /// connected and non-empty.
-fn split_in_two(
+pub(super) fn split_in_two(
     mesh: &TriangleMesh,
     faces: &[FaceId],
     inside: &dyn Fn(FaceId) -> bool,

@@ -42,6 +42,16 @@ pub struct Lscm2002Options {
     /// is within ε of both charts' largest distance (i.e. close to both seeds). Ratio `>= 0`;
     /// 0 disables merging. Default `0.25` (ε = maxdist / 4).
     pub merge_epsilon_fraction: f64,
+    /// Hard-edge angle: on a connected component where Algorithm 1 keeps no feature curve, every
+    /// edge whose sharpness (angle between its faces' normals) is at least this, and that lies
+    /// on a connected set of at least [`super::features::MIN_HARD_CHAIN_EDGES`] such edges, is a
+    /// feature edge by itself; `None` for Algorithm 1 alone. Radians in `(0, π]`. Default
+    /// `Some(π/3)` (60°). Why: Algorithm 1 is made for dense meshes; on a low-poly mesh a crease
+    /// is a handful of edges, shorter than `min_feature_length` and than the
+    /// `max_string_length` look-ahead, so a 12-triangle cube had no feature at all and was cut
+    /// by the diameter rule into two star-shaped charts (packing 0.365); with hard edges it gets
+    /// its 6 sides. A crease of 60° or more is a natural seam whatever the tessellation.
+    pub hard_edge_angle_rad: Option<f64>,
 }
 
 impl Default for Lscm2002Options {
@@ -51,6 +61,7 @@ impl Default for Lscm2002Options {
             max_string_length: 5,
             min_feature_length: 15,
             merge_epsilon_fraction: 0.25,
+            hard_edge_angle_rad: Some(std::f64::consts::FRAC_PI_3),
         }
     }
 }
@@ -96,6 +107,14 @@ impl SegmentOptions {
                     l.merge_epsilon_fraction
                 ),
             );
+        }
+        if let Some(a) = l.hard_edge_angle_rad {
+            if !(a > 0.0 && a <= std::f64::consts::PI) {
+                return bad(
+                    "lscm.hard_edge_angle_rad",
+                    format!("{a} rad is not in (0, π]; use e.g. π/3 (60°), or None"),
+                );
+            }
         }
         if self.max_charts == Some(0) {
             return bad(

@@ -118,13 +118,53 @@ fn subdivided_cube_features_are_the_cube_edges() {
 
 #[test]
 fn small_cube_without_long_features_still_gives_disks() {
-    // 12 faces: no feature reaches 15 edges, so the cube is a closed featureless surface and is
-    // split by the diameter rule.
+    // 12 faces: no feature reaches 15 edges, so without hard edges the cube is a closed
+    // featureless surface and is split by the diameter rule.
     let mesh = build(&fixtures::cube_split_faces());
-    let seg = segment(&mesh);
+    let opts = SegmentOptions {
+        lscm: Lscm2002Options {
+            hard_edge_angle_rad: None,
+            ..Lscm2002Options::default()
+        },
+        ..SegmentOptions::default()
+    };
+    let seg = segment_charts(&mesh, &opts).expect("valid options");
     assert_contract(&mesh, &seg);
     assert_eq!(seg.stats.feature_edges, 0);
     assert!((2..=6).contains(&seg.num_charts()), "{}", seg.num_charts());
+}
+
+#[test]
+fn small_cube_gives_one_chart_per_side_by_its_hard_edges() {
+    // 12 faces, the corpus' Box.glb: Algorithm 1 keeps no curve, so the 12 right-angle edges
+    // are hard-edge features (default 60°) and each side is a chart of its 2 coplanar triangles.
+    let mesh = build(&fixtures::cube_split_faces());
+    let seg = segment(&mesh);
+    assert_contract(&mesh, &seg);
+    assert_eq!(seg.stats.feature_edges, 12, "stats {:?}", seg.stats);
+    assert_eq!(seg.num_charts(), 6, "stats {:?}", seg.stats);
+    for c in &seg.charts {
+        assert_eq!(c.len(), 2);
+        let a = mesh.face_normal(c[0]).expect("non-degenerate");
+        let b = mesh.face_normal(c[1]).expect("non-degenerate");
+        assert!((0..3).all(|k| (a[k] - b[k]).abs() < 1e-12), "{a:?} {b:?}");
+    }
+}
+
+#[test]
+fn small_box_with_unequal_sides_gives_one_chart_per_side() {
+    // A 3 × 2 × 1 box: the faces of the big sides are farther from the edges than those of the
+    // small sides, so a local maximum over the whole vertex fan would seed the big sides only;
+    // compared only on their side of the hard edges, every side gets its seed.
+    let mut input = fixtures::cube_split_faces();
+    for p in &mut input.positions_m {
+        p[0] *= 3.0;
+        p[1] *= 2.0;
+    }
+    let mesh = build(&input);
+    let seg = segment(&mesh);
+    assert_contract(&mesh, &seg);
+    assert_eq!(seg.num_charts(), 6, "stats {:?}", seg.stats);
 }
 
 #[test]
@@ -420,6 +460,16 @@ fn invalid_options_are_rejected_with_the_option_name() {
                 ..Default::default()
             },
             "lscm.merge_epsilon_fraction",
+        ),
+        (
+            SegmentOptions {
+                lscm: Lscm2002Options {
+                    hard_edge_angle_rad: Some(0.0),
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+            "lscm.hard_edge_angle_rad",
         ),
     ];
     let mesh = build(&fixtures::grid(1, 1));

@@ -917,7 +917,14 @@ fn merge_back(
         (a as u32, version[a], b as u32, version[b])
     };
     let mut merges = 0;
-    let mean = mesh.num_faces() / done.len().max(1);
+    // Mean size of the charts that have area: charts made only of zero-area faces (2CylinderEngine
+    // has 10,419, each an isolated triangle) would otherwise pull the mean down to ~6 faces, and
+    // only 1- and 2-face charts would be tried.
+    let (area_faces, area_charts) = done
+        .iter()
+        .filter(|(f, _)| !f.iter().all(|&g| is_degenerate(mesh, g)))
+        .fold((0usize, 0usize), |(n, c), (f, _)| (n + f.len(), c + 1));
+    let mean = area_faces / area_charts.max(1);
     // The `MERGE_TRIES` valid neighbours of chart `i` sharing the most edges with it (ties by
     // index), from the current labels.
     let neighbours = |i: usize, done: &[(Vec<FaceId>, LocatedMap)], label: &[u32]| {
