@@ -110,6 +110,14 @@ pub struct OptionsJson {
     /// Fraction of edges kept as feature candidates, (0, 1], default 0.05.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub feature_fraction: Option<f64>,
+    /// Dihedral angle in degrees, (0, 180], from which an edge is a hard edge, a feature on
+    /// components where the paper's feature curves find none. Absent: 60; `null`: no hard edges.
+    #[serde(
+        default,
+        deserialize_with = "explicit_null",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub hard_edge_angle_deg: Option<Option<f64>>,
     /// Solver, default `auto`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub solver: Option<SolverJson>,
@@ -173,6 +181,17 @@ impl OptionsJson {
         if let Some(f) = self.feature_fraction {
             atlas.segment.lscm.feature_fraction = f;
         }
+        if let Some(a) = self.hard_edge_angle_deg {
+            if let Some(deg) = a.filter(|d| !(*d > 0.0 && *d <= 180.0)) {
+                return Err(AtlasError::InvalidOption {
+                    option: "hard_edge_angle_deg",
+                    detail: format!(
+                        "{deg}° is not in (0, 180]; use e.g. 60, or null (`none` on the CLI) for no hard edges"
+                    ),
+                });
+            }
+            atlas.segment.lscm.hard_edge_angle_rad = a.map(f64::to_radians);
+        }
         atlas.validate.parameterize.method = match self.solver.unwrap_or_default() {
             SolverJson::Auto => ParameterizeMethod::Auto,
             SolverJson::Direct => ParameterizeMethod::Direct,
@@ -214,6 +233,13 @@ impl OptionsJson {
             max_area_ratio: a.validate.max_area_ratio,
             merge_passes: Some(a.validate.merge_passes),
             feature_fraction: Some(a.segment.lscm.feature_fraction),
+            // Rounded to 1e-9° so that 60 reads back as 60, not 59.99999999999999.
+            hard_edge_angle_deg: Some(
+                a.segment
+                    .lscm
+                    .hard_edge_angle_rad
+                    .map(|r| (r.to_degrees() * 1e9).round() / 1e9),
+            ),
             solver: Some(match a.validate.parameterize.method {
                 ParameterizeMethod::Direct => SolverJson::Direct,
                 ParameterizeMethod::Hierarchical => SolverJson::Hierarchical,
@@ -248,7 +274,7 @@ mod tests {
     fn every_field_maps_and_round_trips() {
         let text = r#"{"resolution":[2048,512],"padding_texels":4,"texels_per_unit":300.5,
             "rotations":4,"max_charts":12,"max_stretch":1.2,"max_area_ratio":3.0,"merge_passes":2,"feature_fraction":0.1,
-            "solver":"hierarchical","uv_set":2,"output_format":"gltf"}"#;
+            "hard_edge_angle_deg":45.5,"solver":"hierarchical","uv_set":2,"output_format":"gltf"}"#;
         let o: OptionsJson = serde_json::from_str(text).unwrap();
         let s = o.to_settings().unwrap();
         assert_eq!(
@@ -263,6 +289,10 @@ mod tests {
         assert_eq!(s.atlas.validate.max_stretch, Some(1.2));
         assert_eq!(s.atlas.validate.merge_passes, 2);
         assert_eq!(s.atlas.segment.lscm.feature_fraction, 0.1);
+        assert_eq!(
+            s.atlas.segment.lscm.hard_edge_angle_rad,
+            Some(45.5f64.to_radians())
+        );
         assert_eq!(
             s.atlas.validate.parameterize.method,
             ParameterizeMethod::Hierarchical
@@ -288,6 +318,19 @@ mod tests {
     }
 
     #[test]
+    fn hard_edges_default_to_60_degrees_and_null_turns_them_off() {
+        let absent: OptionsJson = serde_json::from_str("{}").unwrap();
+        let s = absent.to_settings().unwrap();
+        let back = serde_json::to_string(&OptionsJson::effective(&s)).unwrap();
+        assert!(back.contains(r#""hard_edge_angle_deg":60.0"#), "{back}");
+        let null: OptionsJson = serde_json::from_str(r#"{"hard_edge_angle_deg":null}"#).unwrap();
+        let s = null.to_settings().unwrap();
+        assert_eq!(s.atlas.segment.lscm.hard_edge_angle_rad, None);
+        let back = serde_json::to_string(&OptionsJson::effective(&s)).unwrap();
+        assert!(back.contains(r#""hard_edge_angle_deg":null"#), "{back}");
+    }
+
+    #[test]
     fn bad_values_name_the_option() {
         for (text, option) in [
             (r#"{"padding_texels":600}"#, "padding_texels"),
@@ -299,6 +342,8 @@ mod tests {
             (r#"{"max_area_ratio":0.5}"#, "max_area_ratio"),
             (r#"{"max_stretch":0.9}"#, "max_stretch"),
             (r#"{"feature_fraction":2}"#, "lscm.feature_fraction"),
+            (r#"{"hard_edge_angle_deg":0}"#, "hard_edge_angle_deg"),
+            (r#"{"hard_edge_angle_deg":181}"#, "hard_edge_angle_deg"),
             (r#"{"max_charts":0}"#, "max_charts"),
         ] {
             let o: OptionsJson = serde_json::from_str(text).unwrap();

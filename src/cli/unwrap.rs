@@ -63,7 +63,7 @@ pub struct OptionFlags {
     /// Largest Sander L2 stretch of a chart before validation splits it (>= 1), or `none` for
     /// no bound. Default 1.1.
     #[arg(long, value_parser = parse_max_stretch)]
-    pub max_stretch: Option<StretchBound>,
+    pub max_stretch: Option<OrNone>,
     /// The LSCM paper's area test: largest per-chart spread of face area ratios before a chart
     /// is split (>= 1, the paper uses 2). Default: off.
     #[arg(long)]
@@ -74,6 +74,11 @@ pub struct OptionFlags {
     /// Fraction of edges kept as feature candidates, (0, 1]. Default 0.05.
     #[arg(long)]
     pub feature_fraction: Option<f64>,
+    /// Dihedral angle in degrees, (0, 180], from which an edge is a hard edge (a feature on
+    /// parts where the paper's feature curves find none, e.g. low-poly boxes), or `none`.
+    /// Default 60.
+    #[arg(long, value_parser = parse_hard_edge_angle)]
+    pub hard_edge_angle_deg: Option<OrNone>,
     /// Solver: auto, direct or hierarchical. Default auto.
     #[arg(long, value_parser = parse_solver)]
     pub solver: Option<SolverJson>,
@@ -99,6 +104,7 @@ impl OptionFlags {
             max_area_ratio: self.max_area_ratio,
             merge_passes: self.merge_passes,
             feature_fraction: self.feature_fraction,
+            hard_edge_angle_deg: self.hard_edge_angle_deg.map(|b| b.0),
             solver: self.solver,
             uv_set: self.uv_set,
             output_format: self.output_format,
@@ -118,18 +124,26 @@ fn parse_resolution(s: &str) -> Result<ResolutionJson, String> {
     }
 }
 
-/// `--max-stretch`: a bound, or `none` for no bound (a newtype: clap reads a bare
-/// `Option<Option<_>>` as "flag with an optional value").
+/// `--max-stretch` and `--hard-edge-angle-deg`: a number, or `none` (a newtype: clap reads a
+/// bare `Option<Option<_>>` as "flag with an optional value").
 #[derive(Debug, Clone, Copy)]
-pub struct StretchBound(pub Option<f64>);
+pub struct OrNone(pub Option<f64>);
 
-fn parse_max_stretch(s: &str) -> Result<StretchBound, String> {
+fn parse_or_none(s: &str, what: &str, example: &str) -> Result<OrNone, String> {
     if s == "none" {
-        return Ok(StretchBound(None));
+        return Ok(OrNone(None));
     }
     s.parse::<f64>()
-        .map(|b| StretchBound(Some(b)))
-        .map_err(|_| format!("`{s}` is not a stretch bound; use e.g. 1.1, or none"))
+        .map(|b| OrNone(Some(b)))
+        .map_err(|_| format!("`{s}` is not {what}; use e.g. {example}, or none"))
+}
+
+fn parse_max_stretch(s: &str) -> Result<OrNone, String> {
+    parse_or_none(s, "a stretch bound", "1.1")
+}
+
+fn parse_hard_edge_angle(s: &str) -> Result<OrNone, String> {
+    parse_or_none(s, "an angle in degrees", "60")
 }
 
 fn parse_solver(s: &str) -> Result<SolverJson, String> {
