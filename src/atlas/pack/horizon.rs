@@ -337,7 +337,9 @@ impl HorizonPage {
         // positions with one comparison.
         let key = &order[..order.len().min(4)];
         let sum_prof: i64 = order.iter().map(|&c| i64::from(prof[c])).sum();
-        let dense = order.len() == prof.len();
+        // The lines without footprint: the wall sum over the others is the prefix sum over all
+        // lines less theirs (usually none or few).
+        let empty_lines: Vec<usize> = (0..prof.len()).filter(|&c| prof[c] == NO_LINE).collect();
         let lo = lo.max(0);
         let hi = hi.min(wall.len() as i32 - len);
         if lo > hi {
@@ -360,11 +362,12 @@ impl HorizonPage {
             }
             let pos = lo + i as i32;
             let p = pos as usize;
-            let wall_sum = if dense {
-                prefix[p + len as usize] - prefix[p]
-            } else {
-                order.iter().map(|&c| i64::from(wall[p + c])).sum()
-            };
+            let wall_sum = prefix[p + len as usize]
+                - prefix[p]
+                - empty_lines
+                    .iter()
+                    .map(|&c| i64::from(wall[p + c]))
+                    .sum::<i64>();
             let base = sum_prof - wall_sum;
             let bound = best.map_or(i64::MAX, |b| b.0);
             let reject = |t: i64| t > t_max || n * t + base >= bound;

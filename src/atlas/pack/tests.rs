@@ -443,3 +443,77 @@ fn slivers_that_cover_no_texel_centre_are_never_overlapped() {
         );
     }
 }
+
+#[test]
+fn fit_to_page_probes_keep_the_largest_density_that_fits() {
+    // The density chosen (possibly by a probe above the bracket) packs on one page at that
+    // fixed density too, with every guarantee; the search ran the bracket and the probes.
+    let charts = mixed_set(40, 11);
+    let fit = PackOptions::default();
+    let (packing, check) = pack(&charts, &fit);
+    assert_guarantees(&check, "fit to page");
+    assert!(
+        packing.trials as usize > FIT_PROBES + 1,
+        "{} trials",
+        packing.trials
+    );
+    let fixed = PackOptions {
+        density: TexelDensity::TexelsPerUnit(packing.texels_per_unit),
+        ..fit
+    };
+    let (again, check) = pack(&charts, &fixed);
+    assert_eq!(again.num_pages, 1);
+    assert_guarantees(&check, "fixed at the chosen density");
+    assert_eq!(again.charts, packing.charts);
+}
+
+#[test]
+fn thousands_of_small_charts_try_quarter_turns_only_and_keep_the_guarantees() {
+    // 1,500 small triangles (far below SMALL_CHART_TEXELS at the fitted density): the guarantees
+    // hold, and each is placed turned by a multiple of 90° from its diameter-vertical
+    // orientation (its longest edge, the diameter, is axis-aligned).
+    let mut state = 99u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let charts: Vec<OwnedChart> = (0..1500)
+        .map(|_| {
+            triangle([
+                [0.0, 0.0],
+                [1.0 + next(), 0.2 * next()],
+                [0.3 + 0.4 * next(), 0.4 + 0.3 * next()],
+            ])
+        })
+        .collect();
+    let options = PackOptions::default();
+    let (packing, check) = pack(&charts, &options);
+    assert_guarantees(&check, "1500 small triangles");
+    let mut checked = 0;
+    for (chart, placed) in charts.iter().zip(&packing.charts) {
+        let d = packing.texels_per_unit;
+        assert!(chart.area_m2 * d * d < SMALL_CHART_TEXELS, "not small");
+        // The longest edge (the diameter) is vertical or horizontal on the page.
+        let [a, b] = [0usize, 1, 2]
+            .iter()
+            .flat_map(|&i| [0usize, 1, 2].iter().map(move |&j| [i, j]))
+            .max_by(|p, q| {
+                let l = |[i, j]: [usize; 2]| {
+                    let (u, v) = (chart.uv[i], chart.uv[j]);
+                    (u[0] - v[0]).hypot(u[1] - v[1])
+                };
+                l(*p).total_cmp(&l(*q))
+            })
+            .unwrap();
+        let (p, q) = (placed.uv[a], placed.uv[b]);
+        let (dx, dy) = ((p[0] - q[0]).abs(), (p[1] - q[1]).abs());
+        assert!(
+            dx.min(dy) < 1e-9 * dx.max(dy).max(1e-300) + 1e-12,
+            "{dx} {dy}"
+        );
+        checked += 1;
+    }
+    assert_eq!(checked, 1500);
+}
