@@ -9,8 +9,9 @@
 //! half-edge (when its two ends are distinct positions); it is a *seam* half-edge when another
 //! half-edge joins the same two (mesh, position) points, else an open border.
 //!
-//! Cost: O(faces) — one sort over the vertices (not the corners), then counting sorts into
-//! per-vertex and per-corner buckets, each bucket sorted on its own (a handful of entries).
+//! Cost: O(faces) — one sort over the vertices (not the corners), counting sorts of the corners
+//! into per-vertex buckets, each sorted on its own (a handful of entries), and of the half-edges
+//! by their (lower, higher) end ids (two stable counting passes, no comparison sort).
 use super::numpy::np_sum;
 use crate::mesh::{FaceId, TriangleMesh, VertexId};
 
@@ -66,6 +67,28 @@ fn bucket_order(num_buckets: usize, keys: &[u32]) -> (Vec<u32>, Vec<u32>) {
     for (i, &k) in keys.iter().enumerate() {
         order[next[k as usize] as usize] = i as u32;
         next[k as usize] += 1;
+    }
+    (offsets, order)
+}
+
+/// The half-edges `0..lo.len()` ordered by `(lo, hi, index)` with two stable counting sorts
+/// (by `hi`, then by `lo`), and the offsets of each `lo` bucket (`num_buckets + 1`): the order
+/// of a bucket sort by `lo` with each bucket sorted by `(hi, index)`, without comparisons.
+fn pair_order(num_buckets: usize, lo: &[u32], hi: &[u32]) -> (Vec<u32>, Vec<u32>) {
+    let (_, by_hi) = bucket_order(num_buckets, hi);
+    let mut offsets = vec![0u32; num_buckets + 1];
+    for &k in lo {
+        offsets[k as usize + 1] += 1;
+    }
+    for i in 0..num_buckets {
+        offsets[i + 1] += offsets[i];
+    }
+    let mut next = offsets.clone();
+    let mut order = vec![0u32; lo.len()];
+    for &e in &by_hi {
+        let k = lo[e as usize] as usize;
+        order[next[k] as usize] = e;
+        next[k] += 1;
     }
     (offsets, order)
 }
@@ -164,19 +187,18 @@ pub(super) fn connectivity(
         let (a, b) = (ids[3 * f + k], ids[3 * f + (k + 1) % 3]);
         (a.min(b), a.max(b))
     };
-    let lo: Vec<u32> = (0..3 * nf).map(|e| ends(&corner_id, e).0).collect();
-    let (offsets, mut order) = bucket_order(num_cids, &lo);
+    let (lo, hi): (Vec<u32>, Vec<u32>) = (0..3 * nf).map(|e| ends(&corner_id, e)).unzip();
+    let (offsets, order) = pair_order(num_cids, &lo, &hi);
     drop(lo);
     let mut parent: Vec<u32> = (0..nf as u32).collect();
     let mut uv_edge_unique = vec![false; 3 * nf];
     for b in 0..num_cids {
-        let bucket = &mut order[offsets[b] as usize..offsets[b + 1] as usize];
-        bucket.sort_unstable_by_key(|&e| (ends(&corner_id, e as usize).1, e));
+        let bucket = &order[offsets[b] as usize..offsets[b + 1] as usize];
         let mut i = 0;
         while i < bucket.len() {
-            let hi = ends(&corner_id, bucket[i] as usize).1;
+            let h = hi[bucket[i] as usize];
             let mut j = i + 1;
-            while j < bucket.len() && ends(&corner_id, bucket[j] as usize).1 == hi {
+            while j < bucket.len() && hi[bucket[j] as usize] == h {
                 union(&mut parent, bucket[j - 1] / 3, bucket[j] / 3);
                 j += 1;
             }
@@ -186,7 +208,7 @@ pub(super) fn connectivity(
             i = j;
         }
     }
-    drop(order);
+    drop((order, hi));
     drop(corner_id);
 
     // Charts numbered by lowest face (= the root, since the smaller root always wins).
@@ -205,26 +227,24 @@ pub(super) fn connectivity(
     drop(chart_of_root);
 
     // 4. 3-D edges: group half-edges by unordered position-id pair.
-    let plo: Vec<u32> = (0..3 * nf).map(|e| ends(&corner_pid, e).0).collect();
-    let (offsets, mut order) = bucket_order(num_pids, &plo);
-    drop(plo);
+    let (plo, phi): (Vec<u32>, Vec<u32>) = (0..3 * nf).map(|e| ends(&corner_pid, e)).unzip();
+    let (offsets, order) = pair_order(num_pids, &plo, &phi);
     let mut seam_edges = 0usize;
     let mut seam_len = Vec::new();
     // Per half-edge: 1 = chart boundary (seam side), 2 = open border, 0 = neither.
     let mut boundary_kind = vec![0u8; 3 * nf];
     let len = |e: u32| edge_len_m[e as usize / 3][e as usize % 3];
     for b in 0..num_pids {
-        let bucket = &mut order[offsets[b] as usize..offsets[b + 1] as usize];
-        bucket.sort_unstable_by_key(|&e| (ends(&corner_pid, e as usize).1, e));
+        let bucket = &order[offsets[b] as usize..offsets[b + 1] as usize];
         let mut i = 0;
         while i < bucket.len() {
-            let (plo, phi) = ends(&corner_pid, bucket[i] as usize);
+            let (elo, ehi) = (plo[bucket[i] as usize], phi[bucket[i] as usize]);
             let mut j = i + 1;
-            while j < bucket.len() && ends(&corner_pid, bucket[j] as usize).1 == phi {
+            while j < bucket.len() && phi[bucket[j] as usize] == ehi {
                 j += 1;
             }
             let run = &bucket[i..j];
-            let proper = plo != phi;
+            let proper = elo != ehi;
             let shared = run.len() >= 2;
             let mut any_seam = false;
             for &e in run {
