@@ -56,7 +56,13 @@
 //! wall time was about 3× this): bunny (69k faces) at 1024²: 60 ms; a 1M-face grid: 0.8 s at
 //! 1024², 1.15 s at 4096²; the 1M-face `beast_sub2_1M` with one chart per face: 1.2 s; the same
 //! with a closed surface folded flat (8.2M true overlap pairs, each needing all 18 predicates):
-//! 5.6 s. Memory about 100 bytes per face plus 16 bytes per page texel.
+//! 5.6 s. Memory about 100 bytes per face plus 5 bytes per page texel, plus 8 bytes per exact
+//! overlap pair found (none on a correct atlas; at most [`EXACT_OVERLAP_PAIRS_MAX`]).
+//! The exact-overlap search runs concurrently with everything else (it needs no chart ids;
+//! its pairs are classified by chart at the end). Instructions per measure of bunny under callgrind
+//! (one thread), before → after the branch-free padding scan, the radix percentile sorts and
+//! the counting-sorted half-edges (same report bits): raster 321M → 191M, stretch 124M → 88M,
+//! exact overlaps 125M → 132M (the pairs are now stored).
 //!
 //! # Code map
 //! - `geometry.rs`: per-face areas, degeneracy, edge lengths.
