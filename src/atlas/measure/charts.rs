@@ -9,8 +9,9 @@
 //! half-edge (when its two ends are distinct positions); it is a *seam* half-edge when another
 //! half-edge joins the same two (mesh, position) points, else an open border.
 //!
-//! Cost: O(faces) — one sort over the vertices (not the corners), then counting sorts into
-//! per-vertex and per-corner buckets, each bucket sorted on its own (a handful of entries).
+//! Cost: O(faces) — one sort over the vertices (not the corners), counting sorts of the corners
+//! into per-vertex buckets, each sorted on its own (a handful of entries), and of the half-edges
+//! by their (lower, higher) end ids (two stable counting passes, no comparison sort).
 use super::numpy::np_sum;
 use crate::mesh::{FaceId, TriangleMesh, VertexId};
 
@@ -66,6 +67,28 @@ fn bucket_order(num_buckets: usize, keys: &[u32]) -> (Vec<u32>, Vec<u32>) {
     for (i, &k) in keys.iter().enumerate() {
         order[next[k as usize] as usize] = i as u32;
         next[k as usize] += 1;
+    }
+    (offsets, order)
+}
+
+/// The half-edges `0..lo.len()` ordered by `(lo, hi, index)` with two stable counting sorts
+/// (by `hi`, then by `lo`), and the offsets of each `lo` bucket (`num_buckets + 1`): the order
+/// of a bucket sort by `lo` with each bucket sorted by `(hi, index)`, without comparisons.
+fn pair_order(num_buckets: usize, lo: &[u32], hi: &[u32]) -> (Vec<u32>, Vec<u32>) {
+    let (_, by_hi) = bucket_order(num_buckets, hi);
+    let mut offsets = vec![0u32; num_buckets + 1];
+    for &k in lo {
+        offsets[k as usize + 1] += 1;
+    }
+    for i in 0..num_buckets {
+        offsets[i + 1] += offsets[i];
+    }
+    let mut next = offsets.clone();
+    let mut order = vec![0u32; lo.len()];
+    for &e in &by_hi {
+        let k = lo[e as usize] as usize;
+        order[next[k] as usize] = e;
+        next[k] += 1;
     }
     (offsets, order)
 }
@@ -130,101 +153,111 @@ pub(super) fn connectivity(
                 .map(|v| pid_of_vertex[v.index()])
         })
         .collect();
-    let (offsets, mut order) = bucket_order(num_pids, &corner_pid);
-    let corner_key = |c: u32| {
-        let (f, k) = (c as usize / 3, c as usize % 3);
-        let uv = corner_uvs[f][k];
-        (face_page[f], fold32(uv[0]), fold32(uv[1]), c)
-    };
-    let mut corner_id = vec![0u32; 3 * nf];
-    let mut num_cids = 0u32;
-    for b in 0..num_pids {
-        let bucket = &mut order[offsets[b] as usize..offsets[b + 1] as usize];
-        bucket.sort_unstable_by_key(|&c| corner_key(c));
-        let mut prev = None;
-        for &c in bucket.iter() {
-            let (page, u, v, _) = corner_key(c);
-            if prev.is_some() && prev != Some((page, u, v)) {
-                num_cids += 1;
-            }
-            prev = Some((page, u, v));
-            corner_id[c as usize] = num_cids;
-        }
-        if prev.is_some() {
-            num_cids += 1;
-        }
-    }
-    let num_cids = num_cids as usize;
-    drop(order);
-
-    // 3. Half-edge e = 3f + k runs from corner k to corner k+1 of face f. Group by unordered
-    //    corner-id pair: bucket by the lower id, sort each bucket by the higher.
+    // Half-edge e = 3f + k runs from corner k to corner k+1 of face f; its unordered ends.
     let ends = |ids: &[u32], e: usize| {
         let (f, k) = (e / 3, e % 3);
         let (a, b) = (ids[3 * f + k], ids[3 * f + (k + 1) % 3]);
         (a.min(b), a.max(b))
     };
-    let lo: Vec<u32> = (0..3 * nf).map(|e| ends(&corner_id, e).0).collect();
-    let (offsets, mut order) = bucket_order(num_cids, &lo);
-    drop(lo);
-    let mut parent: Vec<u32> = (0..nf as u32).collect();
-    let mut uv_edge_unique = vec![false; 3 * nf];
-    for b in 0..num_cids {
-        let bucket = &mut order[offsets[b] as usize..offsets[b + 1] as usize];
-        bucket.sort_unstable_by_key(|&e| (ends(&corner_id, e as usize).1, e));
-        let mut i = 0;
-        while i < bucket.len() {
-            let hi = ends(&corner_id, bucket[i] as usize).1;
-            let mut j = i + 1;
-            while j < bucket.len() && ends(&corner_id, bucket[j] as usize).1 == hi {
-                union(&mut parent, bucket[j - 1] / 3, bucket[j] / 3);
-                j += 1;
-            }
-            if j == i + 1 {
-                uv_edge_unique[bucket[i] as usize] = true;
-            }
-            i = j;
-        }
-    }
-    drop(order);
-    drop(corner_id);
+    // Steps 2–3 (corner ids, UV edges, charts) and the grouping of step 4 (3-D edges by
+    // position-id pair) are independent until step 4's last loop: computed concurrently.
+    let ((num_cids, uv_edge_unique, chart_of_face, num_charts), (plo, phi, offsets, order)) =
+        rayon::join(
+            || {
+                let (offsets, mut order) = bucket_order(num_pids, &corner_pid);
+                let corner_key = |c: u32| {
+                    let (f, k) = (c as usize / 3, c as usize % 3);
+                    let uv = corner_uvs[f][k];
+                    (face_page[f], fold32(uv[0]), fold32(uv[1]), c)
+                };
+                let mut corner_id = vec![0u32; 3 * nf];
+                let mut num_cids = 0u32;
+                for b in 0..num_pids {
+                    let bucket = &mut order[offsets[b] as usize..offsets[b + 1] as usize];
+                    bucket.sort_unstable_by_key(|&c| corner_key(c));
+                    let mut prev = None;
+                    for &c in bucket.iter() {
+                        let (page, u, v, _) = corner_key(c);
+                        if prev.is_some() && prev != Some((page, u, v)) {
+                            num_cids += 1;
+                        }
+                        prev = Some((page, u, v));
+                        corner_id[c as usize] = num_cids;
+                    }
+                    if prev.is_some() {
+                        num_cids += 1;
+                    }
+                }
+                let num_cids = num_cids as usize;
+                drop(order);
 
-    // Charts numbered by lowest face (= the root, since the smaller root always wins).
-    let mut chart_of_face = vec![0u32; nf];
-    let mut chart_of_root = vec![u32::MAX; nf];
-    let mut num_charts = 0u32;
-    for f in 0..nf as u32 {
-        let r = find(&mut parent, f) as usize;
-        if chart_of_root[r] == u32::MAX {
-            chart_of_root[r] = num_charts;
-            num_charts += 1;
-        }
-        chart_of_face[f as usize] = chart_of_root[r];
-    }
-    drop(parent);
-    drop(chart_of_root);
+                // 3. Group half-edges by unordered corner-id pair (bucket by the lower id, then the higher).
+                let (lo, hi): (Vec<u32>, Vec<u32>) =
+                    (0..3 * nf).map(|e| ends(&corner_id, e)).unzip();
+                let (offsets, order) = pair_order(num_cids, &lo, &hi);
+                drop(lo);
+                let mut parent: Vec<u32> = (0..nf as u32).collect();
+                let mut uv_edge_unique = vec![false; 3 * nf];
+                for b in 0..num_cids {
+                    let bucket = &order[offsets[b] as usize..offsets[b + 1] as usize];
+                    let mut i = 0;
+                    while i < bucket.len() {
+                        let h = hi[bucket[i] as usize];
+                        let mut j = i + 1;
+                        while j < bucket.len() && hi[bucket[j] as usize] == h {
+                            union(&mut parent, bucket[j - 1] / 3, bucket[j] / 3);
+                            j += 1;
+                        }
+                        if j == i + 1 {
+                            uv_edge_unique[bucket[i] as usize] = true;
+                        }
+                        i = j;
+                    }
+                }
+                drop((order, hi));
+                drop(corner_id);
+
+                // Charts numbered by lowest face (= the root, since the smaller root always wins).
+                let mut chart_of_face = vec![0u32; nf];
+                let mut chart_of_root = vec![u32::MAX; nf];
+                let mut num_charts = 0u32;
+                for f in 0..nf as u32 {
+                    let r = find(&mut parent, f) as usize;
+                    if chart_of_root[r] == u32::MAX {
+                        chart_of_root[r] = num_charts;
+                        num_charts += 1;
+                    }
+                    chart_of_face[f as usize] = chart_of_root[r];
+                }
+                drop(parent);
+                drop(chart_of_root);
+                (num_cids, uv_edge_unique, chart_of_face, num_charts)
+            },
+            || {
+                let (plo, phi): (Vec<u32>, Vec<u32>) =
+                    (0..3 * nf).map(|e| ends(&corner_pid, e)).unzip();
+                let (offsets, order) = pair_order(num_pids, &plo, &phi);
+                (plo, phi, offsets, order)
+            },
+        );
 
     // 4. 3-D edges: group half-edges by unordered position-id pair.
-    let plo: Vec<u32> = (0..3 * nf).map(|e| ends(&corner_pid, e).0).collect();
-    let (offsets, mut order) = bucket_order(num_pids, &plo);
-    drop(plo);
     let mut seam_edges = 0usize;
     let mut seam_len = Vec::new();
     // Per half-edge: 1 = chart boundary (seam side), 2 = open border, 0 = neither.
     let mut boundary_kind = vec![0u8; 3 * nf];
     let len = |e: u32| edge_len_m[e as usize / 3][e as usize % 3];
     for b in 0..num_pids {
-        let bucket = &mut order[offsets[b] as usize..offsets[b + 1] as usize];
-        bucket.sort_unstable_by_key(|&e| (ends(&corner_pid, e as usize).1, e));
+        let bucket = &order[offsets[b] as usize..offsets[b + 1] as usize];
         let mut i = 0;
         while i < bucket.len() {
-            let (plo, phi) = ends(&corner_pid, bucket[i] as usize);
+            let (elo, ehi) = (plo[bucket[i] as usize], phi[bucket[i] as usize]);
             let mut j = i + 1;
-            while j < bucket.len() && ends(&corner_pid, bucket[j] as usize).1 == phi {
+            while j < bucket.len() && phi[bucket[j] as usize] == ehi {
                 j += 1;
             }
             let run = &bucket[i..j];
-            let proper = plo != phi;
+            let proper = elo != ehi;
             let shared = run.len() >= 2;
             let mut any_seam = false;
             for &e in run {

@@ -111,11 +111,55 @@ pub(super) fn percentile_weighted(x: &[f64], w: &[f64], order: &[u32], q: f64) -
     finite(x[order[k] as usize])
 }
 
-/// Indices of `x` stably sorted ascending (numpy `argsort(kind="stable")`).
-/// Sorts (value, index) pairs with the index as tie-break: the same permutation as a stable
-/// sort, without indirect (cache-missing) comparisons.
+/// Indices of `x` stably sorted ascending (numpy `argsort(kind="stable")`), in the order of
+/// `f64::total_cmp` with the index as tie-break: the same permutation as a stable sort.
+///
+/// Least-significant-digit radix sort on the `total_cmp` key (8-bit digits, a digit shared by
+/// every key is skipped): `O(n)` passes instead of a comparison sort, and the same permutation
+/// (each pass is stable and the items start in index order). Short inputs use a comparison
+/// sort of (value, index) pairs.
 pub(super) fn stable_order(x: &[f64]) -> Vec<u32> {
-    let mut keyed: Vec<(f64, u32)> = x.iter().zip(0u32..).map(|(&v, i)| (v, i)).collect();
-    keyed.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    keyed.into_iter().map(|(_, i)| i).collect()
+    if x.len() < 256 {
+        let mut keyed: Vec<(f64, u32)> = x.iter().zip(0u32..).map(|(&v, i)| (v, i)).collect();
+        keyed.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        return keyed.into_iter().map(|(_, i)| i).collect();
+    }
+    let mut items: Vec<(u64, u32)> = x
+        .iter()
+        .zip(0u32..)
+        .map(|(&v, i)| (total_key(v), i))
+        .collect();
+    let mut counts = vec![[0u32; 256]; 8];
+    for &(k, _) in &items {
+        for (d, c) in counts.iter_mut().enumerate() {
+            c[((k >> (8 * d)) & 0xff) as usize] += 1;
+        }
+    }
+    let mut spare: Vec<(u64, u32)> = vec![(0, 0); items.len()];
+    for (d, c) in counts.iter().enumerate() {
+        if c.iter().any(|&n| n as usize == items.len()) {
+            continue;
+        }
+        let mut next = [0u32; 256];
+        let mut acc = 0u32;
+        for (slot, &n) in next.iter_mut().zip(c) {
+            *slot = acc;
+            acc += n;
+        }
+        for &item in &items {
+            let b = ((item.0 >> (8 * d)) & 0xff) as usize;
+            spare[next[b] as usize] = item;
+            next[b] += 1;
+        }
+        std::mem::swap(&mut items, &mut spare);
+    }
+    items.into_iter().map(|(_, i)| i).collect()
+}
+
+/// An unsigned key whose order is `f64::total_cmp`'s (the transform `total_cmp` applies to the
+/// bits, with the sign bit flipped to order `i64` values as `u64`).
+fn total_key(v: f64) -> u64 {
+    let mut b = v.to_bits() as i64;
+    b ^= (((b >> 63) as u64) >> 1) as i64;
+    (b as u64) ^ (1 << 63)
 }

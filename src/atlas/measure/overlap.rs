@@ -49,6 +49,37 @@ pub(super) fn interiors_intersect(a: &Tri, b: &Tri) -> bool {
     !separated_by_edge_of(a, b) && !separated_by_edge_of(b, a)
 }
 
+/// [`interiors_intersect`] with a shortcut for two triangles sharing an edge (two equal
+/// corners; most candidate pairs of an atlas are edge neighbours): their interiors meet iff
+/// their third corners lie strictly on the same side of the shared edge's line (on opposite
+/// sides the line separates them; on the same side both contain the points just beside the
+/// edge's midpoint). Both orientations are exact and non-zero (each is a permutation of a
+/// non-degenerate triangle's corners), so the answer is exactly [`interiors_intersect`]'s,
+/// with two predicates instead of up to eighteen. Three equal corners: the same triangle.
+pub(super) fn interiors_intersect_pair(a: &Tri, b: &Tri) -> bool {
+    // For each corner of `a`, the equal corner of `b` (at most one: `b` has distinct corners).
+    let mut in_b = [usize::MAX; 3];
+    let mut shared = 0;
+    for (i, pa) in a.iter().enumerate() {
+        if let Some(k) = b.iter().position(|pb| pb == pa) {
+            in_b[i] = k;
+            shared += 1;
+        }
+    }
+    match shared {
+        3 => true,
+        2 => {
+            let i = in_b.iter().position(|&k| k == usize::MAX).unwrap_or(0);
+            let (p, q) = ((i + 1) % 3, (i + 2) % 3);
+            let rb = 3 - in_b[p] - in_b[q];
+            let sa = orient(a[p], a[q], a[i]) > 0.0;
+            let sb = orient(a[p], a[q], b[rb]) > 0.0;
+            sa == sb
+        }
+        _ => interiors_intersect(a, b),
+    }
+}
+
 /// A face's triangle made counter-clockwise, or `None` when it has no interior.
 pub(super) fn ccw_triangle(uv: &[[f32; 2]; 3]) -> Option<Tri> {
     if !uv.iter().flatten().all(|x| x.is_finite()) {
@@ -80,21 +111,48 @@ struct Entry {
 /// Rows of cells per parallel batch; the pair cap is checked between batches (deterministic).
 const ROWS_PER_BATCH: u32 = 32;
 
+/// The overlapping pairs found, before they are classified by chart
+/// ([`ExactPairs::classify`]): chart ids are not needed to find them, so the search runs
+/// while the charts are being computed.
 #[derive(Default)]
-struct Counts {
-    pairs: u64,
-    same_chart: u64,
+pub(super) struct ExactPairs {
+    /// Every overlapping pair found, `[lower face, higher face]`, in search order.
+    pairs: Vec<[u32; 2]>,
+    /// Up to [`EXACT_OVERLAP_EXAMPLES`] pairs of each batch merged while fewer were known.
     examples: Vec<[FaceId; 2]>,
+    /// Counting stopped at the cap.
+    truncated: bool,
 }
 
-/// Counts exact overlap pairs over all pages.
-pub(super) fn exact_overlaps(
+impl ExactPairs {
+    /// The report: counts by same or different chart, examples sorted.
+    pub(super) fn classify(self, chart_of_face: &[u32]) -> ExactOverlap {
+        let pairs = self.pairs.len() as u64;
+        let same = self
+            .pairs
+            .iter()
+            .filter(|p| chart_of_face[p[0] as usize] == chart_of_face[p[1] as usize])
+            .count() as u64;
+        let mut examples = self.examples;
+        examples.sort_unstable();
+        examples.truncate(EXACT_OVERLAP_EXAMPLES);
+        ExactOverlap {
+            pairs,
+            pairs_same_chart: same,
+            pairs_cross_chart: pairs - same,
+            truncated: self.truncated,
+            examples,
+        }
+    }
+}
+
+/// Finds the exact overlap pairs over all pages (classify them with [`ExactPairs::classify`]).
+pub(super) fn exact_overlap_pairs(
     corner_uvs: &[[[f32; 2]; 3]],
     face_page: &[u32],
     num_pages: u32,
-    chart_of_face: &[u32],
-) -> ExactOverlap {
-    let mut out = ExactOverlap::default();
+) -> ExactPairs {
+    let mut out = ExactPairs::default();
     let mut per_page: Vec<Vec<u32>> = (0..num_pages).map(|_| Vec::new()).collect();
     for (f, &p) in face_page.iter().enumerate() {
         per_page[p as usize].push(f as u32);
@@ -103,20 +161,12 @@ pub(super) fn exact_overlaps(
         if out.truncated {
             break;
         }
-        count_page(corner_uvs, faces, chart_of_face, &mut out);
+        count_page(corner_uvs, faces, &mut out);
     }
-    out.pairs_cross_chart = out.pairs - out.pairs_same_chart;
-    out.examples.sort_unstable();
-    out.examples.truncate(EXACT_OVERLAP_EXAMPLES);
     out
 }
 
-fn count_page(
-    corner_uvs: &[[[f32; 2]; 3]],
-    faces: &[u32],
-    chart_of_face: &[u32],
-    out: &mut ExactOverlap,
-) {
+fn count_page(corner_uvs: &[[[f32; 2]; 3]], faces: &[u32], out: &mut ExactPairs) {
     let mut face = Vec::new();
     let mut tris = Vec::new();
     let mut boxes = Vec::new();
@@ -224,8 +274,8 @@ fn count_page(
     }
     drop((next, ranges, boxes));
 
-    let count_rows = |rows: std::ops::Range<u32>| -> Counts {
-        let mut c = Counts::default();
+    let count_rows = |rows: std::ops::Range<u32>| -> Vec<[u32; 2]> {
+        let mut c = Vec::new();
         for cy in rows {
             for cx in 0..g {
                 let cell = (cy * g + cx) as usize;
@@ -244,16 +294,11 @@ fn count_page(
                             continue;
                         }
                         let (ta, tb) = (ea.cand as usize, eb.cand as usize);
-                        if !interiors_intersect(&tris[ta], &tris[tb]) {
+                        if !interiors_intersect_pair(&tris[ta], &tris[tb]) {
                             continue;
                         }
                         let (fa, fb) = (face[ta], face[tb]);
-                        c.pairs += 1;
-                        c.same_chart +=
-                            u64::from(chart_of_face[fa as usize] == chart_of_face[fb as usize]);
-                        if c.examples.len() < EXACT_OVERLAP_EXAMPLES {
-                            c.examples.push([FaceId(fa.min(fb)), FaceId(fa.max(fb))]);
-                        }
+                        c.push([fa.min(fb), fa.max(fb)]);
                     }
                 }
             }
@@ -264,18 +309,21 @@ fn count_page(
     // thread count, and the cap is applied between batches of batches.
     let batches: Vec<u32> = (0..g).step_by(ROWS_PER_BATCH as usize).collect();
     for group in batches.chunks(64) {
-        let counts: Vec<Counts> = group
+        let found: Vec<Vec<[u32; 2]>> = group
             .par_iter()
             .map(|&r0| count_rows(r0..(r0 + ROWS_PER_BATCH).min(g)))
             .collect();
-        for c in counts {
-            out.pairs += c.pairs;
-            out.pairs_same_chart += c.same_chart;
+        for c in found {
             if out.examples.len() < EXACT_OVERLAP_EXAMPLES {
-                out.examples.extend(c.examples);
+                out.examples.extend(
+                    c.iter()
+                        .take(EXACT_OVERLAP_EXAMPLES)
+                        .map(|p| [FaceId(p[0]), FaceId(p[1])]),
+                );
             }
+            out.pairs.extend(c);
         }
-        if out.pairs >= EXACT_OVERLAP_PAIRS_MAX {
+        if out.pairs.len() as u64 >= EXACT_OVERLAP_PAIRS_MAX {
             out.truncated = true;
             return;
         }

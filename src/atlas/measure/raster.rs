@@ -17,8 +17,8 @@
 //!   Chebyshev distance ≤ padding on the same page (texels covered by several charts are neither
 //!   tested nor testing). Computed with a separable sliding min/max of chart labels.
 //!
-//! Units: texels. Cost: `O(covered texels + faces + W·H·padding)` per page; 8 bytes per texel
-//! (count + label), plus 12 bytes per multiply covered (texel, face) sample.
+//! Units: texels. Cost: `O(covered texels + faces + W·H·padding)` per page; 5 bytes per texel
+//! (count, saturated at 255, + label), plus 12 bytes per multiply covered (texel, face) sample.
 use rayon::prelude::*;
 
 use super::{SampledOverlap, SAMPLED_PAIR_CANDIDATES_MAX};
@@ -120,7 +120,7 @@ pub(super) fn rasterize_pages(
     };
     // (global texel, face) samples on multiply covered texels, all pages.
     let mut multi_samples: Vec<(u64, u32)> = Vec::new();
-    let mut cov = vec![0u32; texels];
+    let mut cov = vec![0u8; texels];
     let mut label = vec![-1i32; texels];
     for (page, faces) in faces_of_page.iter().enumerate() {
         // Faces whose UV box meets the unit square, and the fixed-point scale.
@@ -208,7 +208,7 @@ pub(super) fn rasterize_pages(
                             } else if label[k] != chart {
                                 label[k] = -2;
                             }
-                            cov[k] += 1;
+                            cov[k] = cov[k].saturating_add(1);
                         }
                     });
                 }
@@ -328,44 +328,77 @@ fn sampled_pairs(
 }
 
 /// Covered single-chart texels with a texel of another chart within Chebyshev distance `p`.
+///
+/// A texel of chart `me` violates when the window around it holds a chart label `< me` or
+/// `> me` (labels `< 0`, empty or several charts, are ignored). Read as `u32`, negative labels
+/// are larger than every chart, so the window's smallest label is its `u32` minimum and its
+/// largest its `i32` maximum (an empty or several-charts texel is then never below nor above a
+/// chart): both are separable sliding extrema, computed branch-free over whole rows (rows
+/// first, then columns) in bands of `BAND_ROWS` rows, in parallel, with band-sized buffers.
+/// Integer counts per band, so the sum does not depend on the thread count.
 pub(super) fn padding_violations(label: &[i32], [w, h]: [usize; 2], p: usize) -> u64 {
     if p == 0 || !label.iter().any(|&l| l >= 0) {
         return 0;
     }
-    // Row pass: min and max chart label over [i-p, i+p] (labels < 0 ignored), rows in parallel.
-    let mut rmin = vec![i32::MAX; w * h];
-    let mut rmax = vec![-1i32; w * h];
-    rmin.par_chunks_mut(w)
-        .zip(rmax.par_chunks_mut(w))
-        .zip(label.par_chunks(w))
-        .for_each(|((rmin, rmax), row)| {
-            if !row.iter().any(|&l| l >= 0) {
-                return;
-            }
-            for i in 0..w {
-                let (mut mn, mut mx) = (i32::MAX, -1);
-                for &l in &row[i.saturating_sub(p)..(i + p + 1).min(w)] {
-                    if l >= 0 {
-                        mn = mn.min(l);
-                        mx = mx.max(l);
+    let num_bands = h.div_ceil(BAND_ROWS);
+    (0..num_bands)
+        .into_par_iter()
+        .map(|band| {
+            let (j0, j1) = (band * BAND_ROWS, ((band + 1) * BAND_ROWS).min(h));
+            // Rows `r0..r1` are the band's rows and up to `p` more on each side.
+            let (r0, r1) = (j0.saturating_sub(p), (j1 + p).min(h));
+            let rows = r1 - r0;
+            let mut rmin = vec![0u32; rows * w];
+            let mut rmax = vec![0i32; rows * w];
+            for r in 0..rows {
+                let row = &label[(r0 + r) * w..(r0 + r + 1) * w];
+                let (mn, mx) = (&mut rmin[r * w..(r + 1) * w], &mut rmax[r * w..(r + 1) * w]);
+                for ((a, b), &l) in mn.iter_mut().zip(mx.iter_mut()).zip(row) {
+                    *a = l as u32;
+                    *b = l;
+                }
+                for d in 1..=p.min(w - 1) {
+                    for ((a, b), &l) in mn[..w - d]
+                        .iter_mut()
+                        .zip(mx[..w - d].iter_mut())
+                        .zip(&row[d..])
+                    {
+                        *a = (*a).min(l as u32);
+                        *b = (*b).max(l);
+                    }
+                    for ((a, b), &l) in mn[d..]
+                        .iter_mut()
+                        .zip(mx[d..].iter_mut())
+                        .zip(&row[..w - d])
+                    {
+                        *a = (*a).min(l as u32);
+                        *b = (*b).max(l);
                     }
                 }
-                rmin[i] = mn;
-                rmax[i] = mx;
             }
-        });
-    // Column pass, only at covered single-chart texels; integer counts summed per row.
-    label
-        .par_chunks(w)
-        .enumerate()
-        .map(|(j, row)| {
+            let mut cmin = vec![0u32; w];
+            let mut cmax = vec![0i32; w];
             let mut violations = 0u64;
-            for (i, &me) in row.iter().enumerate() {
-                if me < 0 {
-                    continue;
+            for j in j0..j1 {
+                let (a0, a1) = (j.saturating_sub(p) - r0, (j + p + 1).min(h) - r0);
+                cmin.copy_from_slice(&rmin[a0 * w..(a0 + 1) * w]);
+                cmax.copy_from_slice(&rmax[a0 * w..(a0 + 1) * w]);
+                for a in a0 + 1..a1 {
+                    for ((x, y), (&m, &n)) in cmin.iter_mut().zip(cmax.iter_mut()).zip(
+                        rmin[a * w..(a + 1) * w]
+                            .iter()
+                            .zip(&rmax[a * w..(a + 1) * w]),
+                    ) {
+                        *x = (*x).min(m);
+                        *y = (*y).max(n);
+                    }
                 }
-                let bad = (j.saturating_sub(p)..(j + p + 1).min(h))
-                    .any(|jj| rmin[jj * w + i] < me || rmax[jj * w + i] > me);
+                let row = &label[j * w..(j + 1) * w];
+                let bad: u32 = row
+                    .iter()
+                    .zip(cmin.iter().zip(&cmax))
+                    .map(|(&me, (&mn, &mx))| u32::from(me >= 0 && (mn < me as u32 || mx > me)))
+                    .sum();
                 violations += u64::from(bad);
             }
             violations

@@ -288,6 +288,30 @@ fn exact_overlap_is_exact_on_touching_and_barely_crossing_faces() {
         &overlap::ccw_triangle(&a).unwrap(),
         &overlap::ccw_triangle(&d).unwrap()
     ));
+    // The shared-edge shortcut agrees with the full test on all of these, both ways round,
+    // and on faces folded over a shared edge (same side) or sharing all three corners.
+    let folded: [[f32; 2]; 3] = [[0.5, 0.0], [0.0, 0.5], [0.1, 0.1]];
+    let shuffled: [[f32; 2]; 3] = [a[1], a[2], a[0]];
+    for (x, y) in [
+        (a, b),
+        (a, c),
+        (a, d),
+        (a, folded),
+        (a, shuffled),
+        (b, folded),
+    ] {
+        let (x, y) = (
+            overlap::ccw_triangle(&x).unwrap(),
+            overlap::ccw_triangle(&y).unwrap(),
+        );
+        let full = overlap::interiors_intersect(&x, &y);
+        assert_eq!(overlap::interiors_intersect_pair(&x, &y), full);
+        assert_eq!(overlap::interiors_intersect_pair(&y, &x), full);
+    }
+    assert!(overlap::interiors_intersect_pair(
+        &overlap::ccw_triangle(&a).unwrap(),
+        &overlap::ccw_triangle(&folded).unwrap()
+    ));
     // Zero area: no interior.
     assert!(overlap::ccw_triangle(&[[0.0, 0.0], [0.25, 0.25], [0.5, 0.5]]).is_none());
 }
@@ -307,6 +331,46 @@ fn percentiles_follow_numpy() {
     assert_eq!(percentile_weighted(&x, &w, &o, 50.0), Some(2.0));
     assert_eq!(percentile_weighted(&x, &w, &o, 51.0), Some(3.0));
     assert_eq!(percentile_weighted(&x, &w, &o, 5.0), Some(1.0));
+}
+
+#[test]
+fn stable_order_is_the_stable_total_order_permutation() {
+    // Long enough for the radix path: ties, signed zeros, infinities and NaN included.
+    let specials = [
+        0.0,
+        -0.0,
+        1.0,
+        -1.0,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NAN,
+        -f64::NAN,
+        1e-300,
+        -1e300,
+        f64::MIN_POSITIVE,
+        5e-324,
+    ];
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let x: Vec<f64> = (0..5000)
+        .map(|i| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            match i % 4 {
+                0 => specials[(state >> 33) as usize % specials.len()],
+                1 => ((state >> 40) % 7) as f64,
+                _ => f64::from_bits(state) * 1e-3,
+            }
+        })
+        .collect();
+    let mut expected: Vec<u32> = (0..x.len() as u32).collect();
+    expected.sort_by(|&a, &b| x[a as usize].total_cmp(&x[b as usize]));
+    assert_eq!(stable_order(&x), expected);
+    assert_eq!(stable_order(&x[..100]), {
+        let mut e: Vec<u32> = (0..100).collect();
+        e.sort_by(|&a, &b| x[a as usize].total_cmp(&x[b as usize]));
+        e
+    });
 }
 
 #[test]

@@ -608,6 +608,35 @@ fn merge_to_cap(mesh: &TriangleMesh, charts: &mut Vec<Vec<FaceId>>, cap: usize) 
 /// to global vertex ids. Local vertices are numbered in order of first use along `faces`;
 /// triangles keep `faces` order and corner order (orientation is preserved).
 pub fn chart_mesh(mesh: &TriangleMesh, faces: &[FaceId]) -> (ChartMesh, Vec<VertexId>) {
+    // A chart with at least 1/16 of the mesh's vertex count in faces: number its vertices in
+    // one pass through a per-mesh array (zeroed lazily by the allocator, so its cost is about
+    // the chart's, not the mesh's). The same numbering as the sort below.
+    if faces.len().saturating_mul(16) >= mesh.num_vertices() {
+        // `1 + local index`, 0 for not yet numbered.
+        let mut local_plus_one = vec![0u32; mesh.num_vertices()];
+        let mut global: Vec<VertexId> = Vec::new();
+        let triangles = faces
+            .iter()
+            .map(|&f| {
+                mesh.face_vertices(f).map(|v| {
+                    let slot = &mut local_plus_one[v.index()];
+                    if *slot == 0 {
+                        global.push(v);
+                        *slot = global.len() as u32;
+                    }
+                    *slot - 1
+                })
+            })
+            .collect();
+        let positions_m = global.iter().map(|&v| mesh.position(v)).collect();
+        return (
+            ChartMesh {
+                positions_m,
+                triangles,
+            },
+            global,
+        );
+    }
     // Local numbering by first use without a tree or a per-mesh array: sort the corners by
     // vertex (then corner), so each vertex's first corner is the first of its run; number the
     // vertices in the order of those first corners. O(k log k).

@@ -782,7 +782,24 @@ fn split_for(
     faces: &[FaceId],
     defect: &ChartDefect,
 ) -> Option<(Vec<FaceId>, Vec<FaceId>, Option<usize>)> {
-    let inside = |f: FaceId| faces.binary_search(&f).is_ok();
+    // Membership by a per-mesh flag array for big charts (zeroed lazily by the allocator), by
+    // binary search in the sorted faces for small ones; the same answers.
+    let member: Vec<bool> = if faces.len().saturating_mul(16) >= mesh.num_faces() {
+        let mut m = vec![false; mesh.num_faces()];
+        for &f in faces {
+            m[f.index()] = true;
+        }
+        m
+    } else {
+        Vec::new()
+    };
+    let inside = |f: FaceId| {
+        if member.is_empty() {
+            faces.binary_search(&f).is_ok()
+        } else {
+            member[f.index()]
+        }
+    };
     let diameter = || {
         let a = *super::flood(mesh, &faces[..1], &inside, faces)
             .last()
