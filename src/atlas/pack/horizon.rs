@@ -37,7 +37,7 @@
 //! O(positions × lines) at worst, positions ≤ box extent + chart extent ≤ 2·W. In practice a
 //! vectorized lower bound from the 4 most protruding lines rejects most positions with one
 //! comparison, and the rest stop as soon as the waste cannot beat the best so far. The four
-//! sides run in parallel (rayon) above [`PARALLEL_WORK`], deterministically.
+//! sides run in parallel (rayon) above `PARALLEL_WORK`, deterministically.
 use super::place::{Orientation, EMPTY};
 
 /// A chosen position: orientation index and the canvas position of the orientation's grid

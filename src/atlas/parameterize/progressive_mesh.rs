@@ -40,7 +40,7 @@
 //! Queue: at most one entry per vertex (its cheapest valid half-edge), in a 4-ary heap ordered
 //! by (priority, vertex id) with `f64::total_cmp`.
 //!
-//! Exact dirty tracking. The evaluation of `u` ([`Decimator::best_collapse`]) reads only the
+//! Exact dirty tracking. The evaluation of `u` (`Decimator::best_collapse`) reads only the
 //! star of `u` (faces, positions, ring, edge face counts, angular defect, `acc(u)`), the stars
 //! of its neighbours (link condition) and the global boundary vertex count. A collapse `u → v`
 //! changes only the faces around `u` (and `acc(v)`), so the only vertices whose evaluation can
@@ -53,7 +53,7 @@
 //! the cached half-edge equals a fresh evaluation.
 //!
 //! Parallel and deterministic: popped dirty vertices wait in a batch of
-//! [`EVALUATION_BATCH`]; the batch is evaluated in parallel (each evaluation reads the current
+//! `EVALUATION_BATCH`; the batch is evaluated in parallel (each evaluation reads the current
 //! mesh only) and re-queued in batch order, so the collapse list is the same bits at any thread
 //! count. Change against the paper's strictly sequential greedy order (Algorithm 2): while a
 //! dirty vertex waits in the batch, up to `EVALUATION_BATCH` clean ones may collapse before it
@@ -64,7 +64,7 @@
 //! Cost: `O(n log n)`; at 1M triangles (451k collapses, 1.36M evaluations) the decimation is
 //! about 2.9 s of CPU, bound by cache misses on the random-access star reads (measured with
 //! `perf`). Two layout choices cut misses without changing the rules: each vertex's face list
-//! sits inline in one 64-byte line ([`FaceSlot`], 15 faces, longer lists spill to a pool)
+//! sits inline in one 64-byte line (`FaceSlot`, 15 faces, longer lists spill to a pool)
 //! instead of a `Vec` (header and heap block: two dependent misses), with the same order
 //! (same collapse list bits); and inside the chart the candidates of `u` are ranked by swept
 //! volume, taking one cube root for the chosen one (`cbrt(vol) + acc(u)` is increasing in the

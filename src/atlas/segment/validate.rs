@@ -1,7 +1,8 @@
 //! Chart validation: LSCM paper §3.3 ("validate charts").
 //!
 //! Purpose: after segmentation, flatten every chart with the parameterizer (issue 3,
-//! [`parameterize_chart`]) and split the charts whose map is not usable, until every chart is:
+//! [`parameterize_chart`](crate::atlas::parameterize::parameterize_chart)) and split the charts
+//! whose map is not usable, until every chart is:
 //! - **flipped triangle** ([`ChartMap::flipped_faces`] not empty): split in two from the ends of
 //!   a diameter of the chart's face graph (LSCM cannot flip in exact arithmetic, §2.6 and A.5, but
 //!   HLSCM and rounding can);
@@ -87,7 +88,7 @@
 //! Charts of one round are flattened in parallel (rayon) and the results consumed in chart
 //! order; the splits of a chart depend only on that chart, so the result does not depend on the
 //! thread count or on the processing order. The merge-back is sequential, but the first try of
-//! the next [`MERGE_BATCH`] charts is flattened in parallel ahead of it and used only when both
+//! the next `MERGE_BATCH` charts is flattened in parallel ahead of it and used only when both
 //! charts are unchanged, so its result is that of the sequential pass.
 //!
 //! Units: area ratios are plain ratios (model area per UV area, divided by its minimum over the
