@@ -93,6 +93,9 @@ pub struct PipelineJson {
     pub splits_area_ratio: usize,
     /// Small charts merged back after splitting.
     pub merges: usize,
+    /// Charts cut in two after validation because that raised the packing efficiency (small
+    /// meshes with few charts that pack below 0.61).
+    pub packing_cuts: usize,
     /// Charts kept above the stretch or area-ratio bound (could not be split further).
     pub bound_unresolved: usize,
     /// Charts flattened by the direct LSCM solve.
@@ -181,6 +184,7 @@ impl ReportJson {
                 splits_overlap: s.validation_splits[1],
                 splits_area_ratio: s.validation_splits[2],
                 merges: s.validation_merges,
+                packing_cuts: s.packing_cuts,
                 bound_unresolved: s.bound_unresolved,
                 charts_direct: s.charts_direct,
                 charts_hierarchical: s.charts_hierarchical,
