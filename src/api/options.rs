@@ -34,7 +34,7 @@ impl ResolutionJson {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum SolverJson {
-    /// Direct for charts below 500k vertices, hierarchical (HLSCM) above.
+    /// Direct for charts below 2^20 (about 1M) vertices, hierarchical (HLSCM) above.
     #[default]
     Auto,
     /// Sparse Cholesky.

@@ -157,13 +157,16 @@ pub enum ParameterizeMethod {
 pub struct ParameterizeOptions {
     /// Solver choice. Default [`ParameterizeMethod::Auto`].
     pub method: ParameterizeMethod,
-    /// With `Auto`, charts with at least this many vertices use HLSCM. Default 500_000
-    /// (≈ 1M triangles). Measured with `texatlas bench parameterize` on this 2-core machine:
-    /// the direct solve was faster at every size we ran (126k vertices: 1.6 s vs 2.6 s; 500k
-    /// vertices: 8.1 s vs 12.3 s when the machine was quiet, but 26 s vs 17 s under load),
-    /// while HLSCM's peak memory is 2.3× lower (618 MiB vs 1432 MiB at 500k vertices) and the
-    /// Cholesky fill grows superlinearly. So the direct solve is kept up to the largest size
-    /// where we measured it to be competitive, and HLSCM takes over beyond.
+    /// With `Auto`, charts with at least this many vertices use HLSCM. Default 1_048_576
+    /// (2^20, just above the largest size measured). Measured with `texatlas bench parameterize`
+    /// on this 2-core machine, the direct solve (complex Hermitian Cholesky) was faster at every
+    /// size we ran: 126k vertices 1.6 s vs 2.6 s; 500k vertices (1M triangles) 7.5 s vs 19.4 s
+    /// and 1.0M vertices (2M triangles) 19.3 s vs 46.5 s in one run under load (2026-12-01),
+    /// and 2.3–4.3 s vs 10–12.6 s at 500k in other runs. Since the Hermitian form halved the
+    /// factor, the peak memory is close too: 665 vs 652 MiB at 500k vertices, 1407 vs 1255 MiB
+    /// at 1.0M. (Before it, the direct solve took 1432 MiB at 500k and this threshold was 500k.)
+    /// So the direct solve is used up to the largest size measured, and HLSCM, whose memory grows
+    /// linearly while the Cholesky fill grows superlinearly, beyond it.
     pub auto_hierarchical_min_vertices: usize,
     /// HLSCM tuning.
     pub hlscm: HlscmOptions,
@@ -176,7 +179,7 @@ impl Default for ParameterizeOptions {
     fn default() -> Self {
         Self {
             method: ParameterizeMethod::Auto,
-            auto_hierarchical_min_vertices: 500_000,
+            auto_hierarchical_min_vertices: 1 << 20,
             hlscm: HlscmOptions::default(),
             cg: CgOptions {
                 tolerance: 1e-10,
