@@ -36,7 +36,9 @@
 //! Cost per chart: O(canvas) to build the four walls, then per orientation and side
 //! O(positions × lines) at worst, positions ≤ box extent + chart extent ≤ 2·W. In practice a
 //! vectorized lower bound from the 4 most protruding lines rejects most positions with one
-//! comparison, and the rest stop as soon as the waste cannot beat the best so far. The four
+//! comparison (whole blocks of 64 positions at once when none of them can beat the best so
+//! far: an exact test, the same argmin and ties), and the rest stop as soon as the waste cannot
+//! beat the best so far. The buffers are reused across a side's orientations. The four
 //! sides run in parallel (rayon) above `PARALLEL_WORK`, deterministically.
 use super::place::{Orientation, EMPTY};
 
@@ -152,9 +154,14 @@ impl HorizonPage {
             }
             let wall = self.wall(side);
             let prefix = prefix_sums(&wall);
+            let mut scratch = Scratch {
+                wall,
+                prefix,
+                ..Scratch::default()
+            };
             for (k, o) in orientations.iter().enumerate() {
                 if usable[k] {
-                    self.search(side, &wall, &prefix, k, o, &mut best);
+                    self.search(side, k, o, &mut best, &mut scratch);
                 }
             }
             best
@@ -253,11 +260,10 @@ impl HorizonPage {
     fn search(
         &self,
         side: Side,
-        wall: &[i32],
-        prefix: &[i64],
         k: usize,
         o: &Orientation,
         best: &mut Best,
+        scratch: &mut Scratch,
     ) {
         let [x0, y0, x1, y1] = self.bbox.unwrap_or([0; 4]);
         let [bw, bh] = self.bound;
@@ -308,19 +314,28 @@ impl HorizonPage {
         // prof[c]: the chart's near edge in line c, in the side's t coordinate; an empty line
         // gets a huge value so that it never constrains (wall - prof stays very negative).
         const NO_LINE: i32 = 1 << 29;
-        let prof: Vec<i32> = lines
-            .iter()
-            .map(|&(a, b)| {
-                if (a, b) == EMPTY {
-                    NO_LINE
-                } else if plus {
-                    a
-                } else {
-                    -(b + 1)
-                }
-            })
-            .collect();
-        let mut order: Vec<usize> = (0..prof.len()).filter(|&c| prof[c] != NO_LINE).collect();
+        let Scratch {
+            wall,
+            prefix,
+            prof,
+            order,
+            empty_lines,
+            t_key,
+            base,
+            lb,
+        } = scratch;
+        prof.clear();
+        prof.extend(lines.iter().map(|&(a, b)| {
+            if (a, b) == EMPTY {
+                NO_LINE
+            } else if plus {
+                a
+            } else {
+                -(b + 1)
+            }
+        }));
+        order.clear();
+        order.extend((0..prof.len()).filter(|&c| prof[c] != NO_LINE));
         // Only the 4 most protruding lines need an order (the key lines below); a partial
         // selection, deterministic by (profile, line).
         if order.len() > 4 {
@@ -339,83 +354,144 @@ impl HorizonPage {
         let sum_prof: i64 = order.iter().map(|&c| i64::from(prof[c])).sum();
         // The lines without footprint: the wall sum over the others is the prefix sum over all
         // lines less theirs (usually none or few).
-        let empty_lines: Vec<usize> = (0..prof.len()).filter(|&c| prof[c] == NO_LINE).collect();
+        empty_lines.clear();
+        empty_lines.extend((0..prof.len()).filter(|&c| prof[c] == NO_LINE));
         let lo = lo.max(0);
         let hi = hi.min(wall.len() as i32 - len);
         if lo > hi {
             return;
         }
         let npos = (hi - lo + 1) as usize;
-        let mut t_key = vec![i32::MIN; npos];
+        let (lo_u, len_u) = (lo as usize, len as usize);
+        t_key.clear();
+        t_key.resize(npos, i32::MIN);
         for &c in key {
-            let start = lo as usize + c;
+            let start = lo_u + c;
             let pc = prof[c];
             for (t, &wv) in t_key.iter_mut().zip(&wall[start..start + npos]) {
                 *t = (*t).max(wv - pc);
             }
         }
+        // base[i] = Σ prof - Σ wall over the chart's lines at position lo + i, so that the
+        // waste at t is n·t + base (exact integers: the order of the sums does not matter).
+        base.clear();
+        base.extend(
+            prefix[lo_u + len_u..lo_u + len_u + npos]
+                .iter()
+                .zip(&prefix[lo_u..lo_u + npos])
+                .map(|(&a, &z)| sum_prof - (a - z)),
+        );
+        for &c in empty_lines.iter() {
+            let start = lo_u + c;
+            for (b, &wv) in base.iter_mut().zip(&wall[start..start + npos]) {
+                *b += i64::from(wv);
+            }
+        }
+        // lb[i]: the waste at the key lines' t (a lower bound of the position's waste, as t only
+        // grows below), or i64::MAX when that t is already past the bound on t: a position is
+        // rejected by the key lines exactly when lb[i] >= the best waste so far.
+        lb.clear();
+        lb.extend(t_key.iter().zip(base.iter()).map(|(&t0, &b)| {
+            let t0 = i64::from(t0);
+            if t0 > t_max {
+                i64::MAX
+            } else {
+                n * t0 + b
+            }
+        }));
         const CHUNK: usize = 32;
-        for (i, &t0) in t_key.iter().enumerate() {
-            if best.is_some_and(|b| b.0 == 0) {
+        // Positions in blocks: a block whose least lower bound cannot beat the best so far is
+        // skipped whole (the best does not change inside a skipped block, so this rejects exactly
+        // the positions the test per position would).
+        const BLOCK: usize = 64;
+        for (bi, lb_block) in lb.chunks(BLOCK).enumerate() {
+            let bound = best.map_or(i64::MAX, |b| b.0);
+            if bound == 0 {
                 // Waste is never negative: nothing can beat a perfect fit.
                 return;
             }
-            let pos = lo + i as i32;
-            let p = pos as usize;
-            let wall_sum = prefix[p + len as usize]
-                - prefix[p]
-                - empty_lines
-                    .iter()
-                    .map(|&c| i64::from(wall[p + c]))
-                    .sum::<i64>();
-            let base = sum_prof - wall_sum;
-            let bound = best.map_or(i64::MAX, |b| b.0);
-            let reject = |t: i64| t > t_max || n * t + base >= bound;
-            if reject(i64::from(t0)) {
+            if lb_block.iter().copied().fold(i64::MAX, i64::min) >= bound {
                 continue;
             }
-            let mut t = t0;
-            let mut rejected = false;
-            let window = &wall[p..p + len as usize];
-            for (wc, pc) in window.chunks(CHUNK).zip(prof.chunks(CHUNK)) {
-                // Branch-free over a chunk (vectorizes), then one test.
-                let m = wc
-                    .iter()
-                    .zip(pc)
-                    .map(|(a, b)| a - b)
-                    .fold(i32::MIN, i32::max);
-                t = t.max(m);
-                if reject(i64::from(t)) {
-                    rejected = true;
-                    break;
+            for (j, &lb_i) in lb_block.iter().enumerate() {
+                let bound = best.map_or(i64::MAX, |b| b.0);
+                if bound == 0 {
+                    return;
                 }
+                if lb_i >= bound {
+                    continue;
+                }
+                let i = bi * BLOCK + j;
+                let t0 = t_key[i];
+                let base_i = base[i];
+                let pos = lo + i as i32;
+                let p = pos as usize;
+                let reject = |t: i64| t > t_max || n * t + base_i >= bound;
+                let mut t = t0;
+                let mut rejected = false;
+                let window = &wall[p..p + len_u];
+                for (wc, pc) in window.chunks(CHUNK).zip(prof.chunks(CHUNK)) {
+                    // Branch-free over a chunk (vectorizes), then one test.
+                    let m = wc
+                        .iter()
+                        .zip(pc)
+                        .map(|(a, b)| a - b)
+                        .fold(i32::MIN, i32::max);
+                    t = t.max(m);
+                    if reject(i64::from(t)) {
+                        rejected = true;
+                        break;
+                    }
+                }
+                if rejected {
+                    continue;
+                }
+                // The grid's near side must keep the box within the bound too (a sampled
+                // footprint need not reach its grid's side): moving out is always allowed.
+                let t = i64::from(t).max(t_min);
+                if reject(t) {
+                    continue;
+                }
+                let waste = n * t + base_i;
+                let (x, y) = match side {
+                    Side::PlusY => (pos, t as i32),
+                    Side::MinusY => (pos, -(t as i32)),
+                    Side::PlusX => (t as i32, pos),
+                    Side::MinusX => (-(t as i32), pos),
+                };
+                *best = Some((
+                    waste,
+                    Placement {
+                        orientation: k,
+                        x,
+                        y,
+                    },
+                ));
             }
-            if rejected {
-                continue;
-            }
-            // The grid's near side must keep the box within the bound too (a sampled footprint
-            // need not reach its grid's side): moving out is always allowed.
-            let t = i64::from(t).max(t_min);
-            if reject(t) {
-                continue;
-            }
-            let waste = n * t + base;
-            let (x, y) = match side {
-                Side::PlusY => (pos, t as i32),
-                Side::MinusY => (pos, -(t as i32)),
-                Side::PlusX => (t as i32, pos),
-                Side::MinusX => (-(t as i32), pos),
-            };
-            *best = Some((
-                waste,
-                Placement {
-                    orientation: k,
-                    x,
-                    y,
-                },
-            ));
         }
     }
+}
+
+/// The wall of one side and the buffers of [`HorizonPage::search`], reused across the
+/// orientations of that side.
+#[derive(Debug, Default)]
+struct Scratch {
+    /// The wall of the side ([`HorizonPage::wall`]).
+    wall: Vec<i32>,
+    /// Its prefix sums ([`prefix_sums`]).
+    prefix: Vec<i64>,
+    /// The chart's near edge per line in the side's `t` coordinate.
+    prof: Vec<i32>,
+    /// The chart's non-empty lines, the 4 most protruding first.
+    order: Vec<usize>,
+    /// The chart's empty lines.
+    empty_lines: Vec<usize>,
+    /// Per position, the `t` the key lines force.
+    t_key: Vec<i32>,
+    /// Per position, `Σ prof - Σ wall` over the chart's lines, texels².
+    base: Vec<i64>,
+    /// Per position, the lower bound of the waste from the key lines, texels².
+    lb: Vec<i64>,
 }
 
 fn prefix_sums(v: &[i32]) -> Vec<i64> {
