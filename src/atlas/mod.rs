@@ -88,9 +88,15 @@ impl From<SegmentError> for AtlasError {
 impl From<PackError> for AtlasError {
     fn from(e: PackError) -> Self {
         match e {
-            PackError::InvalidOption { option, detail } => {
-                AtlasError::InvalidOption { option, detail }
-            }
+            // The packer names its options as the wire does, but for the density field.
+            PackError::InvalidOption { option, detail } => AtlasError::InvalidOption {
+                option: if option == "density" {
+                    "texels_per_unit"
+                } else {
+                    option
+                },
+                detail,
+            },
             PackError::Cancelled => AtlasError::Cancelled { stage: Stage::Pack },
             other => AtlasError::Pack(other),
         }

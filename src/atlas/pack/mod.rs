@@ -215,7 +215,7 @@ pub fn pack_charts(
     options: &PackOptions,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
 ) -> Result<Packing, PackError> {
-    validate_options(options)?;
+    options.check()?;
     let prepared = charts
         .iter()
         .enumerate()
@@ -250,7 +250,16 @@ pub fn pack_charts(
     Ok(ctx.output(&trial))
 }
 
-fn validate_options(o: &PackOptions) -> Result<(), PackError> {
+impl PackOptions {
+    /// Rejects meaningless values with [`PackError::InvalidOption`], naming the option and what
+    /// to use; the one check of packing options ([`pack_charts`] and
+    /// [`crate::atlas::AtlasOptions::check`] both call it).
+    pub fn check(&self) -> Result<(), PackError> {
+        check_options(self)
+    }
+}
+
+fn check_options(o: &PackOptions) -> Result<(), PackError> {
     for (name, v) in [
         ("width_texels", o.width_texels),
         ("height_texels", o.height_texels),
@@ -288,7 +297,7 @@ fn validate_options(o: &PackOptions) -> Result<(), PackError> {
             return Err(PackError::InvalidOption {
                 option: "density",
                 detail: format!(
-                    "TexelsPerUnit({d}) is not a finite positive density; use e.g. TexelsPerUnit(256.0), or FitToPage"
+                    "{d} texels per unit is not a finite density > 0; use e.g. 256, or fit to the page (TexelDensity::FitToPage; on the wire, leave texels_per_unit unset)"
                 ),
             });
         }
