@@ -487,10 +487,19 @@ fn pack_inputs(
     };
     for (i, faces) in charts.iter().enumerate() {
         let Some((map, global)) = v.maps[i].as_ref() else {
+            // The parameterizer's own reason when validation recorded one.
+            let detail = v
+                .unresolved
+                .iter()
+                .find_map(|(c, d)| match d {
+                    ChartDefect::Unparameterizable(e) if *c == i => Some(e.to_string()),
+                    _ => None,
+                })
+                .unwrap_or_else(|| "no map was produced".into());
             return Err(AtlasError::Unparameterizable {
                 chart: i,
                 faces: faces.len(),
-                detail: "no map was produced".into(),
+                detail,
             });
         };
         for (l, g) in global.iter().enumerate() {
