@@ -100,42 +100,7 @@ impl SparseCholesky {
         let col_ptr: Vec<usize> = a.row_ptr().to_vec();
         let row_idx: Vec<usize> = a.col_idx().iter().map(|&c| c as usize).collect();
         let symbolic_view = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
-        let symbolic = factorize_symbolic_cholesky(
-            symbolic_view,
-            Side::Upper,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(|e| CholeskyError::Resource {
-            detail: format!("{e:?}"),
-        })?;
-        let mut values = Vec::new();
-        values
-            .try_reserve_exact(symbolic.len_val())
-            .map_err(|e| CholeskyError::Resource {
-                detail: e.to_string(),
-            })?;
-        values.resize(symbolic.len_val(), 0.0f64);
-        let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
-        let mut buffer = MemBuffer::try_new(scratch).map_err(|e| CholeskyError::Resource {
-            detail: format!("{e:?}"),
-        })?;
-        let mat = SparseColMatRef::new(symbolic_view, a.values());
-        symbolic
-            .factorize_numeric_llt::<f64>(
-                &mut values,
-                mat,
-                Side::Upper,
-                Default::default(),
-                par,
-                MemStack::new(&mut buffer),
-                Default::default(),
-            )
-            .map_err(|e| match e {
-                faer::linalg::solvers::LltError::NonPositivePivot { index } => {
-                    CholeskyError::NotPositiveDefinite { index }
-                }
-            })?;
+        let (symbolic, values) = factor_llt(symbolic_view, a.values(), par)?;
         Ok(Self {
             symbolic,
             values,
@@ -212,43 +177,8 @@ impl HermitianCholesky {
     ) -> Result<Self, CholeskyError> {
         check_upper_structure(n, col_ptr, row_idx, values.len())?;
         let symbolic_view = SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx);
-        let symbolic = factorize_symbolic_cholesky(
-            symbolic_view,
-            Side::Upper,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(|e| CholeskyError::Resource {
-            detail: format!("{e:?}"),
-        })?;
-        let mut l_values = Vec::new();
-        l_values
-            .try_reserve_exact(symbolic.len_val())
-            .map_err(|e| CholeskyError::Resource {
-                detail: e.to_string(),
-            })?;
-        l_values.resize(symbolic.len_val(), c64::new(0.0, 0.0));
         let a_values: Vec<c64> = values.iter().map(|&[re, im]| c64::new(re, im)).collect();
-        let scratch = symbolic.factorize_numeric_llt_scratch::<c64>(PAR, Default::default());
-        let mut buffer = MemBuffer::try_new(scratch).map_err(|e| CholeskyError::Resource {
-            detail: format!("{e:?}"),
-        })?;
-        let mat = SparseColMatRef::new(symbolic_view, &a_values);
-        symbolic
-            .factorize_numeric_llt::<c64>(
-                &mut l_values,
-                mat,
-                Side::Upper,
-                Default::default(),
-                PAR,
-                MemStack::new(&mut buffer),
-                Default::default(),
-            )
-            .map_err(|e| match e {
-                faer::linalg::solvers::LltError::NonPositivePivot { index } => {
-                    CholeskyError::NotPositiveDefinite { index }
-                }
-            })?;
+        let (symbolic, l_values) = factor_llt(symbolic_view, &a_values, PAR)?;
         Ok(Self {
             symbolic,
             values: l_values,
@@ -330,6 +260,53 @@ fn check_upper_structure(
         }
     }
     Ok(())
+}
+
+/// AMD ordering, symbolic analysis and numeric LLᴴ of the symmetric (Hermitian) matrix whose
+/// upper triangle is `upper` (structure) with `values`: the one factorization of both
+/// [`SparseCholesky`] and [`HermitianCholesky`]. Allocation failures are
+/// [`CholeskyError::Resource`], a non-positive pivot [`CholeskyError::NotPositiveDefinite`].
+fn factor_llt<I: faer::Index, T: faer::traits::ComplexField>(
+    upper: SymbolicSparseColMatRef<'_, I>,
+    values: &[T],
+    par: Par,
+) -> Result<(SymbolicCholesky<I>, Vec<T>), CholeskyError> {
+    let symbolic = factorize_symbolic_cholesky(
+        upper,
+        Side::Upper,
+        SymmetricOrdering::Amd,
+        CholeskySymbolicParams::default(),
+    )
+    .map_err(|e| CholeskyError::Resource {
+        detail: format!("{e:?}"),
+    })?;
+    let mut l_values = Vec::new();
+    l_values
+        .try_reserve_exact(symbolic.len_val())
+        .map_err(|e| CholeskyError::Resource {
+            detail: e.to_string(),
+        })?;
+    l_values.resize(symbolic.len_val(), T::zero_impl());
+    let scratch = symbolic.factorize_numeric_llt_scratch::<T>(par, Default::default());
+    let mut buffer = MemBuffer::try_new(scratch).map_err(|e| CholeskyError::Resource {
+        detail: format!("{e:?}"),
+    })?;
+    symbolic
+        .factorize_numeric_llt::<T>(
+            &mut l_values,
+            SparseColMatRef::new(upper, values),
+            Side::Upper,
+            Default::default(),
+            par,
+            MemStack::new(&mut buffer),
+            Default::default(),
+        )
+        .map_err(|e| match e {
+            faer::linalg::solvers::LltError::NonPositivePivot { index } => {
+                CholeskyError::NotPositiveDefinite { index }
+            }
+        })?;
+    Ok((symbolic, l_values))
 }
 
 #[cfg(test)]
