@@ -55,6 +55,16 @@ fn fold32(x: f32) -> u32 {
 /// Stable counting sort of `0..keys.len()` by `keys[i] < num_buckets`: returns the bucket
 /// offsets (`num_buckets + 1`) and the item order.
 fn bucket_order(num_buckets: usize, keys: &[u32]) -> (Vec<u32>, Vec<u32>) {
+    bucket_items(num_buckets, keys, 0..keys.len() as u32)
+}
+
+/// Stable counting sort of `items` (each of `0..keys.len()` once, in the order given) by
+/// `keys[item] < num_buckets`: the bucket offsets (`num_buckets + 1`) and the sorted items.
+fn bucket_items(
+    num_buckets: usize,
+    keys: &[u32],
+    items: impl IntoIterator<Item = u32>,
+) -> (Vec<u32>, Vec<u32>) {
     let mut offsets = vec![0u32; num_buckets + 1];
     for &k in keys {
         offsets[k as usize + 1] += 1;
@@ -64,9 +74,10 @@ fn bucket_order(num_buckets: usize, keys: &[u32]) -> (Vec<u32>, Vec<u32>) {
     }
     let mut next = offsets.clone();
     let mut order = vec![0u32; keys.len()];
-    for (i, &k) in keys.iter().enumerate() {
-        order[next[k as usize] as usize] = i as u32;
-        next[k as usize] += 1;
+    for e in items {
+        let k = keys[e as usize] as usize;
+        order[next[k] as usize] = e;
+        next[k] += 1;
     }
     (offsets, order)
 }
@@ -76,21 +87,7 @@ fn bucket_order(num_buckets: usize, keys: &[u32]) -> (Vec<u32>, Vec<u32>) {
 /// of a bucket sort by `lo` with each bucket sorted by `(hi, index)`, without comparisons.
 fn pair_order(num_buckets: usize, lo: &[u32], hi: &[u32]) -> (Vec<u32>, Vec<u32>) {
     let (_, by_hi) = bucket_order(num_buckets, hi);
-    let mut offsets = vec![0u32; num_buckets + 1];
-    for &k in lo {
-        offsets[k as usize + 1] += 1;
-    }
-    for i in 0..num_buckets {
-        offsets[i + 1] += offsets[i];
-    }
-    let mut next = offsets.clone();
-    let mut order = vec![0u32; lo.len()];
-    for &e in &by_hi {
-        let k = lo[e as usize] as usize;
-        order[next[k] as usize] = e;
-        next[k] += 1;
-    }
-    (offsets, order)
+    bucket_items(num_buckets, lo, by_hi)
 }
 
 fn find(parent: &mut [u32], mut x: u32) -> u32 {
