@@ -209,14 +209,7 @@ pub async fn poll_until(
 ) -> Value {
     let start = Instant::now();
     loop {
-        let body: Value = client
-            .get(url)
-            .send()
-            .await
-            .expect("GET")
-            .json()
-            .await
-            .expect("JSON");
+        let body = get_json(client, url).await;
         if done(&body) {
             return body;
         }
