@@ -329,7 +329,8 @@ pub fn run_method(
 }
 
 /// HLSCM options of the bench: the defaults, except for tuning experiments through
-/// `TEXATLAS_BENCH_HLSCM_COARSEST_MAX_VERTICES`, `TEXATLAS_BENCH_HLSCM_RELAX_ITERATIONS` and
+/// `TEXATLAS_BENCH_HLSCM_COARSEST_MAX_VERTICES`, `TEXATLAS_BENCH_HLSCM_LEVEL_RATIO`,
+/// `TEXATLAS_BENCH_HLSCM_RELAX_ITERATIONS` and
 /// `TEXATLAS_BENCH_HLSCM_FINAL_ENERGY_TOLERANCE` (unset in every figure we publish).
 fn hlscm_options_from_env() -> HlscmOptions {
     let mut o = HlscmOptions::default();
@@ -337,6 +338,9 @@ fn hlscm_options_from_env() -> HlscmOptions {
     if let Some(v) = var("TEXATLAS_BENCH_HLSCM_COARSEST_MAX_VERTICES").and_then(|v| v.parse().ok())
     {
         o.coarsest_max_vertices = v;
+    }
+    if let Some(v) = var("TEXATLAS_BENCH_HLSCM_LEVEL_RATIO").and_then(|v| v.parse().ok()) {
+        o.level_ratio = v;
     }
     if let Some(v) = var("TEXATLAS_BENCH_HLSCM_RELAX_ITERATIONS").and_then(|v| v.parse().ok()) {
         o.relax_iterations = v;

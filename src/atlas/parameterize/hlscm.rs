@@ -65,6 +65,17 @@
 //! computed exactly as alone): it did not shorten the hierarchy phase measurably on the loaded
 //! 2-core machine (no idle core), it would on an idle one.
 //!
+//! Setup off the critical path: the finest level's block matrix is converted inside the join
+//! with the decimation (it was done after it); the interpolation expands rows into one flat
+//! arena keyed by coarse level vertex (was a `Vec` per chart vertex keyed by chart vertex,
+//! then two lookups per entry), and its fine rows are built in fixed parallel chunks. Same
+//! bits (the finest energy of the bench height field 1M is unchanged, 2.6151320246e-5).
+//! Tried and not kept (1M triangles, load ~5, one run each, bench variable
+//! `TEXATLAS_BENCH_HLSCM_LEVEL_RATIO`): a coarser ratio needs fewer finest iterations but a
+//! larger coarsest factor, and was no faster: ratio 10 (50k coarsest) 49 iterations, factor
+//! 0.32 s, total 8.19 s; ratio 7 (72k) 38, 0.63 s, 8.51 s; ratio 5 (100k) 32, 0.77 s, 8.27 s;
+//! ratio 4 (125k) 29, 0.91 s, 7.98 s.
+//!
 //! The coarsest level ("the coarsest mesh is parameterized", §4.1) is factored in complex
 //! Hermitian form ([`HermitianCholesky`], as the direct method of [`super::lscm`]): its
 //! 2×2 blocks are complex numbers, so the factor has half the unknowns and half the values of
@@ -238,7 +249,7 @@ pub fn build_hierarchy(
                 })
             }
         },
-        || -> Result<(LevelMesh, LscmSystem, Jacobi), ParameterizeError> {
+        || -> Result<(LevelMesh, LscmSystem, Jacobi, ComplexBlockMatrix), ParameterizeError> {
             // `ProgressiveMesh::level(chart, 0)`: every vertex and triangle, in chart order.
             let mesh = LevelMesh {
                 chart: chart.clone(),
@@ -247,7 +258,10 @@ pub fn build_hierarchy(
             };
             let system = LscmSystem::assemble(&mesh.chart, topology, &map_pins(pins, &mesh))?;
             let jacobi = Jacobi::new(system.matrix());
-            Ok((mesh, system, jacobi))
+            // The block form too: the finest level's is the largest, and here it is off the
+            // decimation's critical path.
+            let blocks = ComplexBlockMatrix::from_normal_matrix(system.matrix())?;
+            Ok((mesh, system, jacobi, blocks))
         },
     );
     let pm = pm?;
@@ -261,7 +275,7 @@ pub fn build_hierarchy(
     applied.reverse();
     let mut levels: Vec<Level> = Vec::with_capacity(applied.len());
     for &m in &applied {
-        let (mesh, system, jacobi) = match (m, finest.take()) {
+        let (mesh, system, jacobi, blocks) = match (m, finest.take()) {
             (0, Some(finest)) => finest,
             (_, keep) => {
                 finest = keep;
@@ -277,13 +291,14 @@ pub fn build_hierarchy(
                 let system =
                     LscmSystem::assemble(&mesh.chart, &level_topology, &map_pins(pins, &mesh))?;
                 let jacobi = Jacobi::new(system.matrix());
-                (mesh, system, jacobi)
+                let blocks = ComplexBlockMatrix::from_normal_matrix(system.matrix())?;
+                (mesh, system, jacobi, blocks)
             }
         };
         levels.push(Level {
             applied: m,
             jacobi,
-            blocks: ComplexBlockMatrix::from_normal_matrix(system.matrix())?,
+            blocks,
             mesh,
             system,
             prolongation: None,
@@ -346,6 +361,9 @@ fn map_pins(pins: &[Pin], mesh: &LevelMesh) -> Vec<Pin> {
 /// Most coarse vertices one fine vertex interpolates from in the multilevel preconditioner.
 const MAX_INTERPOLATION_TERMS: usize = 6;
 
+/// How many rows ahead [`prolongation_matrix`] starts loading the data a row will read.
+const WARM_AHEAD: usize = 8;
+
 /// The vertex-split interpolation as a matrix from the coarse level's free unknowns to the
 /// fine level's free unknowns: a coarse vertex keeps its value; a re-inserted vertex gets the
 /// barycentric combination of its recorded triangle, expanded recursively down to coarse
@@ -358,27 +376,47 @@ fn prolongation_matrix(
     fine_applied: usize,
 ) -> Result<VertexInterpolation, ParameterizeError> {
     let n = pm.vertex_count;
-    // Expansion of each chart vertex in coarse chart vertices.
-    let mut expansion: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
-    for &v in &coarse.mesh.chart_vertex {
-        expansion[v as usize].push((v, 1.0));
-    }
     let hi = coarse.applied.min(pm.collapses.len());
     let lo = fine_applied.min(hi);
+    // Expansion of each chart vertex in coarse vertices, as `(coarse level vertex, weight)`:
+    // `arena[span[v].0..span[v].1]` (empty when not expanded yet). Coarse level vertices are
+    // numbered in increasing chart vertex order, so rows sort and merge exactly as they would
+    // by chart vertex (same sums in the same order), and the final mapping to free unknowns
+    // reads a coarse-sized table only. One flat arena instead of a `Vec` per vertex: every
+    // row is written once (a vertex is removed once), and half a million small allocations
+    // were a measurable part of the hierarchy's setup.
+    let mut span: Vec<(usize, usize)> = vec![(0, 0); n];
+    let mut arena: Vec<(u32, f64)> =
+        Vec::with_capacity(coarse.mesh.chart_vertex.len() + MAX_INTERPOLATION_TERMS * (hi - lo));
+    for (lv, &v) in coarse.mesh.chart_vertex.iter().enumerate() {
+        span[v as usize] = (arena.len(), arena.len() + 1);
+        arena.push((lv as u32, 1.0));
+    }
     let mut merged: Vec<(u32, f64)> = Vec::new();
-    for c in pm.collapses[lo..hi].iter().rev() {
+    let mut row: Vec<(u32, f64)> = Vec::new();
+    let collapses = &pm.collapses[lo..hi];
+    let mut warm = 0u64;
+    for (i, c) in collapses.iter().enumerate().rev() {
+        // Start loading the rows a few collapses ahead need (a read; changes nothing).
+        if let Some(ahead) = i.checked_sub(WARM_AHEAD).map(|j| &collapses[j]) {
+            for &t in &ahead.triangle {
+                if let Some(&(start, _)) = span.get(t as usize) {
+                    warm ^= arena.get(start).map_or(0, |e| e.1.to_bits());
+                }
+            }
+        }
         merged.clear();
         for k in 0..3 {
             let w = c.barycentric[k];
             if w == 0.0 {
                 continue;
             }
-            if let Some(e) = expansion.get(c.triangle[k] as usize) {
-                merged.extend(e.iter().map(|&(v, a)| (v, a * w)));
+            if let Some(&(start, end)) = span.get(c.triangle[k] as usize) {
+                merged.extend(arena[start..end].iter().map(|&(v, a)| (v, a * w)));
             }
         }
         merged.sort_by_key(|e| e.0);
-        let mut row: Vec<(u32, f64)> = Vec::with_capacity(merged.len());
+        row.clear();
         for &(v, a) in &merged {
             match row.last_mut() {
                 Some(last) if last.0 == v => last.1 += a,
@@ -397,37 +435,68 @@ fn prolongation_matrix(
             }
             row.sort_by_key(|e| e.0);
         }
-        if let Some(slot) = expansion.get_mut(c.removed as usize) {
-            *slot = row;
+        if let Some(slot) = span.get_mut(c.removed as usize) {
+            *slot = (arena.len(), arena.len() + row.len());
+            arena.extend_from_slice(&row);
         }
     }
+    std::hint::black_box(warm);
     let coarse_free = coarse.system.free_index_map();
     let fine_free = fine_system.free_index_map();
-    let coarse_level_vertex = &coarse.mesh.level_vertex;
-    let mut row_ptr = Vec::with_capacity(fine_system.unknowns() / 2 + 1);
-    row_ptr.push(0usize);
-    let mut col: Vec<u32> = Vec::new();
-    let mut weight: Vec<f64> = Vec::new();
-    // Free fine vertices in increasing free index = increasing level vertex = increasing chart id.
-    let mut entries: Vec<(u32, f64)> = Vec::new();
-    for (level_v, &chart_v) in fine_mesh.chart_vertex.iter().enumerate() {
-        if fine_free.get(level_v).copied().unwrap_or(u32::MAX) == u32::MAX {
-            continue;
-        }
-        entries.clear();
-        for &(cv, a) in &expansion[chart_v as usize] {
-            let lv = coarse_level_vertex[cv as usize];
-            let k = coarse_free.get(lv as usize).copied().unwrap_or(u32::MAX);
-            if k != u32::MAX {
-                entries.push((k, a));
+    // Rows of the free fine vertices, in increasing free index = increasing level vertex =
+    // increasing chart id; fixed chunks in parallel (each row is computed alone, so the bits
+    // do not depend on the thread count), concatenated in order.
+    let chunks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = fine_mesh
+        .chart_vertex
+        .par_chunks(VERTICES_PER_TASK)
+        .enumerate()
+        .map(|(chunk, chart_vs)| {
+            let mut lens = Vec::with_capacity(chart_vs.len());
+            let mut col: Vec<u32> = Vec::with_capacity(MAX_INTERPOLATION_TERMS * chart_vs.len());
+            let mut weight: Vec<f64> = Vec::with_capacity(col.capacity());
+            let mut entries: Vec<(u32, f64)> = Vec::new();
+            let mut warm = 0u64;
+            for (k, &chart_v) in chart_vs.iter().enumerate() {
+                if let Some(&ahead) = chart_vs.get(k + WARM_AHEAD) {
+                    let (start, _) = span[ahead as usize];
+                    warm ^= arena.get(start).map_or(0, |e| e.1.to_bits());
+                }
+                let level_v = chunk * VERTICES_PER_TASK + k;
+                if fine_free.get(level_v).copied().unwrap_or(u32::MAX) == u32::MAX {
+                    continue;
+                }
+                entries.clear();
+                let (start, end) = span[chart_v as usize];
+                for &(lv, a) in &arena[start..end] {
+                    let k = coarse_free.get(lv as usize).copied().unwrap_or(u32::MAX);
+                    if k != u32::MAX {
+                        entries.push((k, a));
+                    }
+                }
+                entries.sort_by_key(|e| e.0);
+                for &(k, a) in &entries {
+                    col.push(k);
+                    weight.push(a);
+                }
+                lens.push(entries.len());
             }
+            std::hint::black_box(warm);
+            (lens, col, weight)
+        })
+        .collect();
+    let rows: usize = chunks.iter().map(|c| c.0.len()).sum();
+    let entries: usize = chunks.iter().map(|c| c.1.len()).sum();
+    let mut row_ptr = Vec::with_capacity(rows + 1);
+    row_ptr.push(0usize);
+    let mut col: Vec<u32> = Vec::with_capacity(entries);
+    let mut weight: Vec<f64> = Vec::with_capacity(entries);
+    for (lens, c, w) in chunks {
+        for len in lens {
+            let last = row_ptr.last().copied().unwrap_or(0);
+            row_ptr.push(last + len);
         }
-        entries.sort_by_key(|e| e.0);
-        for &(k, a) in &entries {
-            col.push(k);
-            weight.push(a);
-        }
-        row_ptr.push(col.len());
+        col.extend_from_slice(&c);
+        weight.extend_from_slice(&w);
     }
     if row_ptr.len() != fine_system.unknowns() / 2 + 1 {
         return Err(internal(
