@@ -1124,7 +1124,7 @@ fn merge_back(
 /// not connected through glued edges; neither is a disk, and any other intersection has χ ≠ 1.
 /// So: a disk ⟺ at least one shared edge and `V − E = 1`. Debug builds check it against
 /// [`disk_check`] on every merge try.
-fn union_is_disk(
+pub(super) fn union_is_disk(
     mesh: &TriangleMesh,
     a: &[FaceId],
     b: &[FaceId],
