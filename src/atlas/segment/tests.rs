@@ -368,6 +368,62 @@ fn disk_check_on_grid_subsets() {
     ));
 }
 
+/// The merge-back's disk test from two charts' intersection (`validate::union_is_disk`) gives
+/// the answer of [`check_chart_is_disk`] on the union, for every pair of charts of partitions
+/// into small disks (blocks of consecutive faces cut into disks by the disk guarantee) of
+/// closed, open and flat meshes; unions that are disks, annuli, pinched or apart all occur.
+#[test]
+fn union_is_disk_agrees_with_the_disk_check_of_the_union() {
+    let inputs = [
+        fixtures::torus(12, 6, 2.0, 0.5),
+        fixtures::uv_sphere(6, 10, 1.0),
+        fixtures::cylinder_open(8, 4, 1.0, 2.0),
+        subdivided_cube(3),
+        fixtures::grid(6, 5),
+        fixtures::fin(),
+        fixtures::bowtie(),
+    ];
+    let (mut disks, mut glued_non_disks, mut apart) = (0, 0, 0);
+    for input in &inputs {
+        let mesh = build(input);
+        for block in [2usize, 3, 5, 8, 13] {
+            let ids: Vec<FaceId> = mesh.faces().collect();
+            let work: Vec<Vec<FaceId>> = ids.chunks(block).map(<[FaceId]>::to_vec).collect();
+            let charts = enforce_disks(&mesh, work, &mut SegmentStats::default());
+            let mut label = vec![u32::MAX; mesh.num_faces()];
+            for (i, c) in charts.iter().enumerate() {
+                for f in c {
+                    label[f.index()] = i as u32;
+                }
+            }
+            for i in 0..charts.len() {
+                for j in i + 1..charts.len() {
+                    let mut union = charts[i].clone();
+                    union.extend_from_slice(&charts[j]);
+                    let expected = check_chart_is_disk(&mesh, &union);
+                    let got = validate::union_is_disk(
+                        &mesh, &charts[i], &charts[j], &label, i as u32, j as u32,
+                    );
+                    assert_eq!(
+                        got,
+                        expected.is_ok(),
+                        "block {block}, charts {i} and {j}: disk check says {expected:?}"
+                    );
+                    match expected {
+                        Ok(_) => disks += 1,
+                        Err(NotADisk::Disconnected { .. }) => apart += 1,
+                        Err(_) => glued_non_disks += 1,
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        disks > 0 && glued_non_disks > 0 && apart > 0,
+        "{disks} disks, {glued_non_disks} glued non-disks, {apart} apart"
+    );
+}
+
 #[test]
 fn pinched_chart_is_reported_as_pinched() {
     // A fan of 6 triangles around a centre vertex (a hexagon) minus two non-adjacent triangles

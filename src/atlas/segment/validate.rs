@@ -62,8 +62,10 @@
 //! fixed order and the parameterizer is deterministic.
 //!
 //! Valid charts are then merged into a neighbour when the merged chart is still a disk and
-//! passes all tests ([`ValidateOptions::merge_passes`] passes, smallest first, two neighbours
-//! tried each; see `merge_back`).
+//! passes all tests ([`ValidateOptions::merge_passes`] passes, default 3, smallest first, two
+//! neighbours tried each; see `merge_back`). Whether a union is a disk is decided from the two
+//! charts' intersection alone (`union_is_disk`, linear in the smaller chart), not by a disk
+//! check of the union.
 //!
 //! **Zero-area faces** (3-D degenerate: collinear corners or a repeated vertex,
 //! [`TriangleMesh::face_degeneracy`]) cannot be flattened by LSCM (their `1/√d_T` weight is
@@ -135,9 +137,15 @@ pub struct ValidateOptions {
     /// is then at most this bound too. Default `Some(1.1)` (issue 5's target for the bunny).
     pub max_stretch: Option<f64>,
     /// Passes of the merge-back of valid charts into a neighbour (see `merge_back`): the first
-    /// pass tries only the small charts, later ones every chart. A count; 0 disables merging.
-    /// Default 1. More passes give fewer charts for much more time (measured on bunny, one run,
-    /// release: 1 pass 29 charts in 0.43 s CPU, 3 passes 15 charts in 1.8 s).
+    /// pass tries only the small charts, later ones every chart; merging stops early after a
+    /// pass without a merge. A count; 0 disables merging. Default 3: on the corpus (one run,
+    /// release) the third pass is the last that merges anything (4 merges on armadillo, 1 on
+    /// spot) and more passes change only 2CylinderEngine, by one chart; 1 pass leaves
+    /// armadillo at 74 charts, 2 at 43, 3 at 39 (issue 4: at most 40), bunny at 28, 14 and 14,
+    /// for a global L2 stretch of 1.037 → 1.068 (armadillo) and 1.022 → 1.053 (bunny), both
+    /// within issue 5's 1.10. The later passes flatten unions of large charts and cost most of
+    /// the validation time (bunny: about 0.2 s of CPU for the first pass, 0.8 s for the other
+    /// two, one thread, machine under load).
     pub merge_passes: usize,
     /// How each chart is flattened. Default [`ParameterizeOptions::default`].
     pub parameterize: ParameterizeOptions,
@@ -149,7 +157,7 @@ impl Default for ValidateOptions {
             max_area_ratio: None,
             area_ratio_trim: 0.0,
             max_stretch: Some(1.1),
-            merge_passes: 1,
+            merge_passes: 3,
             parameterize: ParameterizeOptions::default(),
         }
     }
@@ -904,7 +912,9 @@ fn split_off_degenerate(
 /// [`ValidateOptions::merge_passes`] passes. The first pass visits only the small charts (fewer
 /// faces than half the mean chart size when validation ends), later passes every chart: the
 /// cost of a try is that of flattening the union, so trying every chart is much dearer
-/// (measured on bunny: 1 pass 29 charts, 0.45 s CPU; 3 passes 14 charts, 2 s). Each pass visits
+/// (measured on bunny, one thread, under load: the first pass 23 tries of 2,100 faces on
+/// average, 0.06 s of flattening; the second 34 tries of 10,000 faces, 0.6 s, of which 20
+/// fail — 17 over the stretch bound, 3 not a disk). Each pass visits
 /// the valid charts smallest first
 /// (ties by lowest face) and tries the [`MERGE_TRIES`] neighbours sharing the most edges with it
 /// (ties by index), keeping the first valid union; a merged chart can take more merges later in
@@ -969,11 +979,17 @@ fn merge_back(
                      label: &[u32],
                      done: &[(Vec<FaceId>, LocatedMap)]| {
         let (ci, cj) = (i as u32, j as u32);
-        let inside = |f: FaceId| {
-            let l = label[f.index()];
-            l == ci || l == cj
-        };
-        if disk_check(mesh, union, &inside).is_err() {
+        let is_disk = union_is_disk(mesh, &done[i].0, &done[j].0, label, ci, cj);
+        debug_assert_eq!(
+            is_disk,
+            disk_check(mesh, union, &|f: FaceId| {
+                let l = label[f.index()];
+                l == ci || l == cj
+            })
+            .is_ok(),
+            "union_is_disk disagrees with disk_check"
+        );
+        if !is_disk {
             return None;
         }
         let (big, small) = if done[i].0.len() > done[j].0.len() {
@@ -1094,6 +1110,64 @@ fn merge_back(
     Ok(merges)
 }
 
+/// Whether the union of the charts `a` and `b` (disks, disjoint, labelled `la` and `lb` in
+/// `label`) is a disk, as [`disk_check`] would find, in time linear in the smaller chart instead
+/// of the union. Their intersection — the vertices used by faces of both, and the glued edges
+/// between a face of each — lies on the boundary of each (a vertex inside `a` has all its faces
+/// in `a`), a simple cycle since `a` is a disk, so it is a set of disjoint arcs and points, or
+/// the whole cycle. By inclusion–exclusion `χ(a ∪ b) = χ(a) + χ(b) − χ(a ∩ b) = 2 − (V − E)` of
+/// the intersection, so the union has χ = 1 exactly when the intersection is a single arc or a
+/// single point. A single arc with at least one edge glues two disks along a boundary arc: a disk
+/// (one component through the glued edge, one fan per vertex because the mesh's vertices are
+/// manifold and the fans of `a` and `b` at an arc vertex are joined across an arc edge, one
+/// boundary loop). A single point joins them at a pinch, and no shared edge means the union is
+/// not connected through glued edges; neither is a disk, and any other intersection has χ ≠ 1.
+/// So: a disk ⟺ at least one shared edge and `V − E = 1`. Debug builds check it against
+/// [`disk_check`] on every merge try.
+pub(super) fn union_is_disk(
+    mesh: &TriangleMesh,
+    a: &[FaceId],
+    b: &[FaceId],
+    label: &[u32],
+    la: u32,
+    lb: u32,
+) -> bool {
+    let (small, own, other) = if a.len() <= b.len() {
+        (a, la, lb)
+    } else {
+        (b, lb, la)
+    };
+    let mut shared_edges = 0usize;
+    // Vertices of the smaller chart's boundary half-edges: only they can be shared.
+    let mut candidates: Vec<VertexId> = Vec::new();
+    for &f in small {
+        for h in mesh.face_halfedges(f) {
+            let across = mesh.opposite(h).map(|o| label[o.face().index()]);
+            if across == Some(own) {
+                continue;
+            }
+            if across == Some(other) {
+                shared_edges += 1;
+            }
+            candidates.push(mesh.from_vertex(h));
+            candidates.push(mesh.to_vertex(h));
+        }
+    }
+    if shared_edges == 0 {
+        return false;
+    }
+    candidates.sort_unstable();
+    candidates.dedup();
+    let shared_vertices = candidates
+        .iter()
+        .filter(|&&v| {
+            mesh.outgoing_halfedges(v)
+                .any(|g| label[g.face().index()] == other)
+        })
+        .count();
+    shared_vertices == shared_edges + 1
+}
+
 /// A map of the union `union` (ascending) of the chart `big` and the chart `small` (faces)
 /// that keeps `big`'s map and flattens only the vertices of `small` not in `big`: the least
 /// squares conformal extension (`lscm::solve_direct_complex` with every shared vertex pinned
@@ -1189,7 +1263,11 @@ const MERGE_TRIES: usize = 2;
 
 /// Charts whose first merge try `merge_back` flattens in parallel ahead of the sequential pass
 /// (a constant, so the speculation does not depend on the thread count; the result never does).
-const MERGE_BATCH: usize = 4;
+/// 2, one per core of the 2-core target machine: with 4, up to a fifth of the speculative
+/// flattening of the all-chart passes was thrown away (a chart earlier in the batch merged with
+/// a chart of a later try), e.g. bunny 0.12 of 0.67 s of CPU in its second pass, armadillo
+/// 0.06 of 0.41 s; with 2, 0 and 0.06 s (one run each, one thread, release, load ≈ 5).
+const MERGE_BATCH: usize = 2;
 
 /// A merge try of `merge_back`: (chart, its version, neighbour, its version).
 type MergeKey = (usize, u32, usize, u32);
