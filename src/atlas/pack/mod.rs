@@ -31,6 +31,7 @@
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §4; K. Zhou, J. Snyder, B. Guo,
 //! H.-Y. Shum, "Iso-charts", SGP 2004, §6.
+pub mod hole;
 pub mod horizon;
 pub mod place;
 pub mod raster;
