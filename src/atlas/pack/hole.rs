@@ -106,9 +106,7 @@ impl Row {
         if self.first > self.last {
             x1 - x0
         } else {
-            self.inner_max
-                .max(self.first - x0)
-                .max(x1 - 1 - self.last)
+            self.inner_max.max(self.first - x0).max(x1 - 1 - self.last)
         }
     }
 
@@ -267,4 +265,3 @@ impl Occupancy {
         None
     }
 }
-

@@ -894,7 +894,10 @@ mod tests {
                     let mut cols = vec![EMPTY; w];
                     bits.for_each_run(|r, a, b| {
                         let (r, a, b) = (r as usize, a as i32, b as i32);
-                        assert!(r < h && a <= b && (b as usize) < w, "chart {i} run {r} {a} {b}");
+                        assert!(
+                            r < h && a <= b && (b as usize) < w,
+                            "chart {i} run {r} {a} {b}"
+                        );
                         rows[r] = (rows[r].0.min(a), rows[r].1.max(b));
                         for c in a..=b {
                             let e = &mut cols[c as usize];
