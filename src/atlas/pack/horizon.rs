@@ -25,9 +25,14 @@
 //! padding 2, 16 rotations) this raised the efficiency from 0.624 to 0.650 for twice the search.
 //! The page bound keeps the box within `W × H` either way.
 //!
+//! Before the horizons, [`HorizonPage::find`] asks the page's [`Occupancy`] for a position
+//! inside the bounding box ([`super::hole`], an extension of the papers); every commit records
+//! the chart's `F` in both.
+//!
 //! Invariant (the no-overlap guarantee, exact on the texel grid): a chart's padded footprint
 //! `D` never meets the footprint `F` of a chart already placed, because in each line it covers
-//! it lies entirely beyond the horizon of every earlier `F`; and every `D` lies inside the
+//! it lies entirely beyond the horizon of every earlier `F` (or, placed in a hole, meets no
+//! occupied texel of the exact occupancy); and every `D` lies inside the
 //! bounding box, hence inside the page after translation. So every `F` keeps `padding` empty
 //! texels (Chebyshev) from every other `F` and from the page edge.
 //!
