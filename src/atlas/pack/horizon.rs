@@ -25,9 +25,14 @@
 //! padding 2, 16 rotations) this raised the efficiency from 0.624 to 0.650 for twice the search.
 //! The page bound keeps the box within `W × H` either way.
 //!
+//! Before the horizons, [`HorizonPage::find`] asks the page's [`Occupancy`] for a position
+//! inside the bounding box ([`super::hole`], an extension of the papers); every commit records
+//! the chart's `F` in both.
+//!
 //! Invariant (the no-overlap guarantee, exact on the texel grid): a chart's padded footprint
 //! `D` never meets the footprint `F` of a chart already placed, because in each line it covers
-//! it lies entirely beyond the horizon of every earlier `F`; and every `D` lies inside the
+//! it lies entirely beyond the horizon of every earlier `F` (or, placed in a hole, meets no
+//! occupied texel of the exact occupancy); and every `D` lies inside the
 //! bounding box, hence inside the page after translation. So every `F` keeps `padding` empty
 //! texels (Chebyshev) from every other `F` and from the page edge.
 //!
@@ -40,6 +45,7 @@
 //! far: an exact test, the same argmin and ties), and the rest stop as soon as the waste cannot
 //! beat the best so far. The buffers are reused across a side's orientations. The four
 //! sides run in parallel (rayon) above `PARALLEL_WORK`, deterministically.
+use super::hole::Occupancy;
 use super::place::{Orientation, EMPTY};
 
 /// A chosen position: orientation index and the canvas position of the orientation's grid
@@ -64,6 +70,8 @@ pub struct HorizonPage {
     rows: Vec<(i32, i32)>,
     /// Bounding box of the `D`s placed: `[x0, y0, x1, y1)`.
     bbox: Option<[i32; 4]>,
+    /// The placed `F`s, for hole filling ([`super::hole`]).
+    occupancy: Occupancy,
 }
 
 /// Which side a chart comes from, and the axis it slides along.
@@ -94,6 +102,7 @@ impl HorizonPage {
             cols: vec![EMPTY; 2 * w as usize],
             rows: vec![EMPTY; 2 * h as usize],
             bbox: None,
+            occupancy: Occupancy::new(2 * h),
         }
     }
 
@@ -145,6 +154,11 @@ impl HorizonPage {
                     })
             })
             .collect();
+        // Hole filling first (a position inside the box, [`super::hole`]): it never grows the
+        // box; the horizons only run when no orientation fits inside it.
+        if let Some(p) = self.occupancy.find([x0, y0, x1, y1], orientations, &usable) {
+            return Some(p);
+        }
         // `start`: the best of the sides searched before (a candidate must beat it strictly,
         // as in the reduction below). Waste is never negative, so a zero ends the search.
         let per_side = |side: Side, start: Best| -> Best {
@@ -214,6 +228,12 @@ impl HorizonPage {
                 let e = &mut self.rows[(py + r as i32) as usize];
                 *e = (e.0.min(px + a), e.1.max(px + b));
             }
+        }
+        if let Some(bits) = &o.footprint_bits {
+            let occupancy = &mut self.occupancy;
+            bits.for_each_run(|r, a, b| {
+                occupancy.occupy(py + r as i32, px + a as i32, px + b as i32);
+            });
         }
         let (w, h) = (o.width_texels as i32, o.height_texels as i32);
         let b = [px, py, px + w, py + h];

@@ -3,7 +3,13 @@
 //! Purpose: the third stage of the atlas pipeline. [`pack_charts`] scales every chart to one
 //! texel density, turns it, and places it with the horizon ("Tetris") packer of lscm-2002 §4,
 //! extended as isocharts-2004 §6 (insertion from four directions, 16 rotations), then writes
-//! normalized page UVs.
+//! normalized page UVs. On top of the papers' packers, each chart is first offered a *hole*
+//! ([`hole`]): a position inside the packing's current bounding box where its padded
+//! footprint meets no placed footprint (exact per-row occupancy of every placed chart; first
+//! fit, a bounded search); only when there is none does the horizon search grow the box. The
+//! horizons then take the new footprint as for any placement, so their invariant holds.
+//! Measured (1024², padding 2, 16 rotations): 2CylinderEngine 0.314 → 0.523, bunny 0.651 →
+//! 0.653, armadillo 0.651 → 0.692, spot 0.619 → 0.655.
 //!
 //! **Stage contract (GUIDE.md).** Charts never overlap, keep `padding_texels` empty texels
 //! between each other and from the page edge, and stay inside \[0,1\]². Exactly: the
@@ -25,12 +31,14 @@
 //!
 //! Code map: [`raster`] (centre-sampled and conservative footprints, Chebyshev dilation),
 //! [`place`] (density, diameter orientation, rotations, outline triangles, per-line footprint
-//! extents), [`horizon`] (the four-direction horizon packer, one page), this file (options, the
+//! extents, footprint bits), [`horizon`] (the four-direction horizon packer, one page),
+//! [`hole`] (the occupancy of a page and the search inside its box), this file (options, the
 //! fit-to-page density search, output).
 //!
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §4; K. Zhou, J. Snyder, B. Guo,
 //! H.-Y. Shum, "Iso-charts", SGP 2004, §6.
+pub mod hole;
 pub mod horizon;
 pub mod place;
 pub mod raster;
@@ -209,7 +217,8 @@ pub const FIT_PROBE_STEP: f64 = 0.01;
 /// Cost: one packing per density trial (one with a fixed density, at most
 /// [`MAX_FIT_TRIALS`] + [`FIT_PROBES`] + 1 with fit-to-page, typically 9–13); a packing rasterizes
 /// `⌈rotations / 4⌉` footprints per chart (or `rotations` when not a multiple of 4) and runs
-/// the horizon search of [`horizon`] for every orientation.
+/// the hole search of [`hole`] and, when it finds nothing, the horizon search of [`horizon`]
+/// for every orientation.
 pub fn pack_charts(
     charts: &[PackChart<'_>],
     options: &PackOptions,

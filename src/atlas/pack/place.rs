@@ -340,6 +340,75 @@ pub struct Orientation {
     pub dilated: Option<Extents>,
     /// Extents of `F` (the footprint itself), same grid.
     pub footprint: Option<Extents>,
+    /// The texels of `F` themselves, same grid (for the occupancy of [`super::hole`]); `None`
+    /// when not rasterized.
+    pub footprint_bits: Option<FootprintBits>,
+}
+
+/// The texels of a footprint `F` on its orientation's grid: a rasterized mask, a window of it
+/// (the trimmed grid), and a number of quarter turns, so that the quarter turns of one
+/// rasterized angle share one mask (turned only when a chart is committed).
+#[derive(Debug, Clone)]
+pub struct FootprintBits {
+    mask: std::sync::Arc<Mask>,
+    /// Top-left of the window in the mask, texels.
+    origin: [u32; 2],
+    /// Window size before turning (width, height), texels.
+    size: [u32; 2],
+    /// Quarter turns `(x, y) → (height - 1 - y, x)` applied to the window, `0..4`.
+    turns: u8,
+}
+
+impl FootprintBits {
+    /// Calls `f(row, first, last)` for every run of set texels of the turned window (inclusive
+    /// columns, grid coordinates), row by row. Cost: O(window area / 64 + runs) unturned or
+    /// half-turned, O(window area) for the odd quarter turns (they transpose the bits).
+    pub fn for_each_run(&self, mut f: impl FnMut(u32, u32, u32)) {
+        let [ox, oy] = self.origin;
+        let [w, h] = self.size;
+        match self.turns {
+            0 | 2 => {
+                for j in 0..h {
+                    for (a, b) in self.mask.runs_in(oy + j, ox, ox + w) {
+                        let (a, b) = (a - ox, b - ox);
+                        if self.turns == 0 {
+                            f(j, a, b);
+                        } else {
+                            f(h - 1 - j, w - 1 - b, w - 1 - a);
+                        }
+                    }
+                }
+            }
+            _ => {
+                // Odd turns: the turned grid is h wide and w tall; its row i is the window's
+                // column i (turn 1: column x = h - 1 - j; turn 3: row w - 1 - i, column j).
+                let mut t = Mask::new(h, w);
+                for j in 0..h {
+                    for (a, b) in self.mask.runs_in(oy + j, ox, ox + w) {
+                        for i in a - ox..=b - ox {
+                            if self.turns == 1 {
+                                t.set_span(i, h - 1 - j, h - 1 - j);
+                            } else {
+                                t.set_span(w - 1 - i, j, j);
+                            }
+                        }
+                    }
+                }
+                for i in 0..w {
+                    for (a, b) in t.runs_in(i, 0, h) {
+                        f(i, a, b);
+                    }
+                }
+            }
+        }
+    }
+
+    fn rotate90(&self) -> Self {
+        Self {
+            turns: (self.turns + 1) % 4,
+            ..self.clone()
+        }
+    }
 }
 
 impl Orientation {
@@ -366,6 +435,7 @@ impl Orientation {
             height_texels: self.width_texels,
             dilated: self.dilated.as_ref().map(Extents::rotate90),
             footprint: self.footprint.as_ref().map(Extents::rotate90),
+            footprint_bits: self.footprint_bits.as_ref().map(FootprintBits::rotate90),
         }
     }
 }
@@ -473,6 +543,7 @@ fn orient(
         height_texels: dims[1],
         dilated: None,
         footprint: None,
+        footprint_bits: None,
     };
     if dims[0] > i64::from(page_texels[0]) || dims[1] > i64::from(page_texels[1]) {
         return o;
@@ -535,6 +606,7 @@ fn orient(
     }
     let f = Extents::of(&mask);
     let d = Extents::of(&mask.dilate(padding_texels));
+    let mask = std::sync::Arc::new(mask);
     // Sampled footprints need not reach the grid's margin: trim the grid to `D` (the grid is
     // the chart's box for the packer).
     let span = |v: &[(i32, i32)]| {
@@ -543,6 +615,12 @@ fn orient(
         Some((first, last))
     };
     let (Some((x0, x1)), Some((y0, y1))) = (span(&d.cols), span(&d.rows)) else {
+        o.footprint_bits = Some(FootprintBits {
+            size: [mask.width(), mask.height()],
+            mask,
+            origin: [0, 0],
+            turns: 0,
+        });
         o.footprint = Some(f);
         o.dilated = Some(d);
         return o;
@@ -575,6 +653,12 @@ fn orient(
     o.height_texels = (y1 - y0 + 1) as i64;
     o.footprint = Some(cut(&f));
     o.dilated = Some(cut(&d));
+    o.footprint_bits = Some(FootprintBits {
+        mask,
+        origin: [x0 as u32, y0 as u32],
+        size: [(x1 - x0 + 1) as u32, (y1 - y0 + 1) as u32],
+        turns: 0,
+    });
     o
 }
 
@@ -785,6 +869,47 @@ mod tests {
             }
         }
         assert!(checked > 10_000, "{checked}");
+    }
+
+    #[test]
+    fn footprint_bits_agree_with_the_extents_in_every_turn() {
+        // The runs of every orientation (the quarter turns share a mask turned on demand) give
+        // back its per-row and per-column extents of F exactly, and stay on its grid.
+        let set = crate::atlas::pack::test_charts::mixed_set(20, 5);
+        let mut turned = 0;
+        for (i, owned) in set.iter().enumerate() {
+            let chart = owned.as_pack_chart();
+            let prep = prepare_chart(i, &chart).unwrap();
+            for density in [4.0, 23.0] {
+                for (k, o) in orientations(&chart, &prep, density, 8, 2, [1024, 1024])
+                    .iter()
+                    .enumerate()
+                {
+                    let (Some(f), Some(bits)) = (&o.footprint, &o.footprint_bits) else {
+                        continue;
+                    };
+                    turned += usize::from(k >= 2);
+                    let (w, h) = (o.width_texels as usize, o.height_texels as usize);
+                    let mut rows = vec![EMPTY; h];
+                    let mut cols = vec![EMPTY; w];
+                    bits.for_each_run(|r, a, b| {
+                        let (r, a, b) = (r as usize, a as i32, b as i32);
+                        assert!(
+                            r < h && a <= b && (b as usize) < w,
+                            "chart {i} run {r} {a} {b}"
+                        );
+                        rows[r] = (rows[r].0.min(a), rows[r].1.max(b));
+                        for c in a..=b {
+                            let e = &mut cols[c as usize];
+                            *e = (e.0.min(r as i32), e.1.max(r as i32));
+                        }
+                    });
+                    assert_eq!(rows, f.rows, "chart {i} orientation {k} rows");
+                    assert_eq!(cols, f.cols, "chart {i} orientation {k} columns");
+                }
+            }
+        }
+        assert!(turned > 20, "{turned}");
     }
 
     #[test]

@@ -196,6 +196,62 @@ impl Mask {
         out
     }
 
+    /// The runs of set texels of row `y` within columns `x0..x1`, as inclusive `(first, last)`
+    /// columns, left to right (clipped to the window). Cost: O((x1 - x0) / 64 + runs).
+    pub fn runs_in(&self, y: u32, x0: u32, x1: u32) -> Vec<(u32, u32)> {
+        let mut out = Vec::new();
+        let x1 = x1.min(self.width);
+        if y >= self.height || x0 >= x1 {
+            return out;
+        }
+        let row = &self.bits[y as usize * self.words_per_row..][..self.words_per_row];
+        // Bit x of the row, restricted to the window: word k masked to [x0, x1).
+        let word = |k: usize| -> u64 {
+            let mut v = row[k];
+            let base = (k * 64) as u32;
+            if base < x0 {
+                v &= u64::MAX << (x0 - base);
+            }
+            if base + 64 > x1 {
+                v &= u64::MAX >> (base + 64 - x1);
+            }
+            v
+        };
+        let (k0, k1) = ((x0 >> 6) as usize, ((x1 - 1) >> 6) as usize);
+        let mut start: Option<u32> = None;
+        for k in k0..=k1 {
+            let v = word(k);
+            let base = (k * 64) as u32;
+            let mut pos = 0u32;
+            // Walk the word's runs: alternately the next set bit and the next clear bit.
+            while pos < 64 {
+                match start {
+                    None => {
+                        let rest = v >> pos;
+                        if rest == 0 {
+                            break;
+                        }
+                        pos += rest.trailing_zeros();
+                        start = Some(base + pos);
+                    }
+                    Some(s) => {
+                        let rest = !v >> pos;
+                        if rest == 0 {
+                            break;
+                        }
+                        pos += rest.trailing_zeros();
+                        out.push((s, base + pos - 1));
+                        start = None;
+                    }
+                }
+            }
+        }
+        if let Some(s) = start {
+            out.push((s, x1 - 1));
+        }
+        out
+    }
+
     /// Per column, the first and last set row (`None` for an empty column). Cost:
     /// O(height × width / 64 + width).
     pub fn column_extents(&self) -> Vec<Option<(u32, u32)>> {

@@ -517,3 +517,53 @@ fn thousands_of_small_charts_try_quarter_turns_only_and_keep_the_guarantees() {
     }
     assert_eq!(checked, 1500);
 }
+
+#[test]
+fn small_charts_fill_the_hole_of_a_ring_instead_of_growing_the_box() {
+    // A square ring (outer side 10, inner side 4) and small squares that fit its hole: the
+    // horizons alone can only put them outside the ring (its hole is behind every horizon);
+    // hole filling must put every one inside the hole, keeping every guarantee.
+    let o = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]];
+    let i = [[3.0, 3.0], [7.0, 3.0], [7.0, 7.0], [3.0, 7.0]];
+    let mut uv: Vec<[f64; 2]> = o.to_vec();
+    uv.extend(i);
+    let mut triangles = Vec::new();
+    for k in 0..4u32 {
+        let n = (k + 1) % 4;
+        triangles.push([k, n, 4 + n]);
+        triangles.push([k, 4 + n, 4 + k]);
+    }
+    let mut charts = vec![OwnedChart {
+        uv,
+        triangles,
+        area_m2: 84.0,
+    }];
+    for _ in 0..5 {
+        charts.push(OwnedChart {
+            uv: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            area_m2: 1.0,
+        });
+    }
+    let options = PackOptions {
+        width_texels: 512,
+        height_texels: 512,
+        density: TexelDensity::TexelsPerUnit(20.0),
+        ..PackOptions::default()
+    };
+    let (packing, check) = pack(&charts, &options);
+    assert_eq!(packing.num_pages, 1);
+    assert_guarantees(&check, "ring");
+    // The ring's hole on the page: the box of its inner vertices.
+    let ring = &packing.charts[0].uv;
+    let lo = [0, 1].map(|k| (4..8).map(|v| ring[v][k]).fold(f64::INFINITY, f64::min));
+    let hi = [0, 1].map(|k| (4..8).map(|v| ring[v][k]).fold(f64::NEG_INFINITY, f64::max));
+    for (c, placed) in packing.charts.iter().enumerate().skip(1) {
+        for p in &placed.uv {
+            assert!(
+                (0..2).all(|k| lo[k] < p[k] && p[k] < hi[k]),
+                "small chart {c} at {p:?} is outside the ring's hole {lo:?}..{hi:?}"
+            );
+        }
+    }
+}
