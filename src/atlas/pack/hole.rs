@@ -139,6 +139,8 @@ impl Row {
 #[derive(Debug, Clone)]
 pub struct Occupancy {
     rows: Vec<Row>,
+    /// Texels occupied in all (footprints never overlap, so each is counted once).
+    occupied_texels: i64,
 }
 
 impl Occupancy {
@@ -146,11 +148,13 @@ impl Occupancy {
     pub fn new(height: i32) -> Self {
         Self {
             rows: vec![Row::empty(); height as usize],
+            occupied_texels: 0,
         }
     }
 
     /// Marks texels `x0..=x1` of row `y` occupied (inside the canvas, `x0 <= x1`).
     pub fn occupy(&mut self, y: i32, x0: i32, x1: i32) {
+        self.occupied_texels += i64::from(x1 - x0) + 1;
         self.rows[y as usize].occupy(x0, x1);
     }
 
@@ -192,6 +196,13 @@ impl Occupancy {
                     .map(|(r, &(a, b))| (r as i32, a, b)),
             );
             if rows.is_empty() {
+                continue;
+            }
+            // Exact pruning: every placed `F` lies inside the box, so the box has
+            // `box area − occupied` free texels, and the rows of `D` need that many at least.
+            let needed_texels: i64 = rows.iter().map(|&(_, a, b)| i64::from(b - a) + 1).sum();
+            let free_texels = i64::from(x1 - x0) * i64::from(y1 - y0) - self.occupied_texels;
+            if needed_texels > free_texels {
                 continue;
             }
             // Longest row first (ties: first row): it rejects most canvas rows.

@@ -25,9 +25,9 @@
 //! padding 2, 16 rotations) this raised the efficiency from 0.624 to 0.650 for twice the search.
 //! The page bound keeps the box within `W × H` either way.
 //!
-//! Before the horizons, [`HorizonPage::find`] asks the page's [`Occupancy`] for a position
-//! inside the bounding box ([`super::hole`], an extension of the papers); every commit records
-//! the chart's `F` in both.
+//! On a page made by [`HorizonPage::with_holes`], [`HorizonPage::find`] first asks the page's
+//! [`Occupancy`] for a position inside the bounding box ([`super::hole`], an extension of the
+//! papers); every commit then records the chart's `F` in both.
 //!
 //! Invariant (the no-overlap guarantee, exact on the texel grid): a chart's padded footprint
 //! `D` never meets the footprint `F` of a chart already placed, because in each line it covers
@@ -70,8 +70,9 @@ pub struct HorizonPage {
     rows: Vec<(i32, i32)>,
     /// Bounding box of the `D`s placed: `[x0, y0, x1, y1)`.
     bbox: Option<[i32; 4]>,
-    /// The placed `F`s, for hole filling ([`super::hole`]).
-    occupancy: Occupancy,
+    /// The placed `F`s, for hole filling ([`super::hole`]); `None` when the page packs by the
+    /// horizons only.
+    occupancy: Option<Occupancy>,
 }
 
 /// Which side a chart comes from, and the axis it slides along.
@@ -102,8 +103,16 @@ impl HorizonPage {
             cols: vec![EMPTY; 2 * w as usize],
             rows: vec![EMPTY; 2 * h as usize],
             bbox: None,
-            occupancy: Occupancy::new(2 * h),
+            occupancy: None,
         }
+    }
+
+    /// An empty page like [`Self::new`] that also fills holes: each chart is first offered a
+    /// position inside the bounding box ([`super::hole`]).
+    pub fn with_holes(width_texels: u32, height_texels: u32) -> Self {
+        let mut page = Self::new(width_texels, height_texels);
+        page.occupancy = Some(Occupancy::new(2 * page.bound[1]));
+        page
     }
 
     /// Bounding box of the placed padded footprints in canvas texels, `[x0, y0, x1, y1)`.
@@ -156,8 +165,10 @@ impl HorizonPage {
             .collect();
         // Hole filling first (a position inside the box, [`super::hole`]): it never grows the
         // box; the horizons only run when no orientation fits inside it.
-        if let Some(p) = self.occupancy.find([x0, y0, x1, y1], orientations, &usable) {
-            return Some(p);
+        if let Some(occupancy) = &self.occupancy {
+            if let Some(p) = occupancy.find([x0, y0, x1, y1], orientations, &usable) {
+                return Some(p);
+            }
         }
         // `start`: the best of the sides searched before (a candidate must beat it strictly,
         // as in the reduction below). Waste is never negative, so a zero ends the search.
@@ -229,8 +240,7 @@ impl HorizonPage {
                 *e = (e.0.min(px + a), e.1.max(px + b));
             }
         }
-        if let Some(bits) = &o.footprint_bits {
-            let occupancy = &mut self.occupancy;
+        if let (Some(occupancy), Some(bits)) = (&mut self.occupancy, &o.footprint_bits) {
             bits.for_each_run(|r, a, b| {
                 occupancy.occupy(py + r as i32, px + a as i32, px + b as i32);
             });

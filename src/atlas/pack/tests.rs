@@ -520,9 +520,11 @@ fn thousands_of_small_charts_try_quarter_turns_only_and_keep_the_guarantees() {
 
 #[test]
 fn small_charts_fill_the_hole_of_a_ring_instead_of_growing_the_box() {
-    // A square ring (outer side 10, inner side 4) and small squares that fit its hole: the
-    // horizons alone can only put them outside the ring (its hole is behind every horizon);
-    // hole filling must put every one inside the hole, keeping every guarantee.
+    // A square ring (outer side 10, inner side 4) and small squares that fit its hole, on a
+    // page that leaves no room beside the ring: the horizons alone can only put the squares
+    // outside the ring (its hole is behind every horizon), so they open a second page; the
+    // packer then fills holes, and every square must land inside the hole, on one page, keeping
+    // every guarantee.
     let o = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]];
     let i = [[3.0, 3.0], [7.0, 3.0], [7.0, 7.0], [3.0, 7.0]];
     let mut uv: Vec<[f64; 2]> = o.to_vec();
@@ -546,13 +548,16 @@ fn small_charts_fill_the_hole_of_a_ring_instead_of_growing_the_box() {
         });
     }
     let options = PackOptions {
-        width_texels: 512,
-        height_texels: 512,
+        width_texels: 212,
+        height_texels: 212,
         density: TexelDensity::TexelsPerUnit(20.0),
         ..PackOptions::default()
     };
     let (packing, check) = pack(&charts, &options);
-    assert_eq!(packing.num_pages, 1);
+    assert_eq!(
+        packing.num_pages, 1,
+        "the squares did not go into the ring's hole"
+    );
     assert_guarantees(&check, "ring");
     // The ring's hole on the page: the box of its inner vertices.
     let ring = &packing.charts[0].uv;
