@@ -104,7 +104,7 @@ pub struct OptionsJson {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_area_ratio: Option<f64>,
     /// Passes of merging valid charts back into a neighbour after validation; 0 disables
-    /// merging. Default 3.
+    /// merging. Default 3; meshes above 500k faces get the first pass only.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub merge_passes: Option<usize>,
     /// Fraction of edges kept as feature candidates, (0, 1], default 0.05.

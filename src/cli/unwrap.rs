@@ -68,7 +68,8 @@ pub struct OptionFlags {
     /// is split (>= 1, the paper uses 2). Default: off.
     #[arg(long)]
     pub max_area_ratio: Option<f64>,
-    /// Passes of merging valid charts back into a neighbour (0 disables). Default 3.
+    /// Passes of merging valid charts back into a neighbour (0 disables). Default 3 (the first
+    /// pass only on meshes above 500k triangles).
     #[arg(long)]
     pub merge_passes: Option<usize>,
     /// Fraction of edges kept as feature candidates, (0, 1]. Default 0.05.
