@@ -125,7 +125,8 @@ impl Row {
         x.max(self.last + 1 - a)
     }
 
-    /// Whether column `x` is occupied.
+    /// Whether column `x` is occupied (the tests' view of the row).
+    #[cfg(test)]
     fn get(&self, x: i32) -> bool {
         if self.first > self.last || x < self.first || x > self.last {
             return false;
@@ -156,11 +157,6 @@ impl Occupancy {
     pub fn occupy(&mut self, y: i32, x0: i32, x1: i32) {
         self.occupied_texels += i64::from(x1 - x0) + 1;
         self.rows[y as usize].occupy(x0, x1);
-    }
-
-    /// Whether texel `(x, y)` is occupied (`false` outside the canvas).
-    pub fn get(&self, x: i32, y: i32) -> bool {
-        y >= 0 && (y as usize) < self.rows.len() && self.rows[y as usize].get(x)
     }
 
     /// The best position inside `bbox` (`[x0, y0, x1, y1)`, canvas texels) for one of the
@@ -274,5 +270,60 @@ impl Occupancy {
             i = (i + 1) % n;
         }
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Row;
+
+    /// A row of `W` columns filled by random disjoint runs, checked after every run against a
+    /// plain array: occupancy per column, the longest free run, and the first fit of random
+    /// chart rows (columns outside `0..W` are free, as on the canvas beyond the placed charts).
+    #[test]
+    fn a_row_agrees_with_a_plain_array() {
+        const W: i32 = 160;
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = |n: i32| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % n as u64) as i32
+        };
+        let mut runs = 0;
+        for _trial in 0..20 {
+            let mut row = Row::empty();
+            let mut taken = [false; W as usize];
+            for _ in 0..40 {
+                let s = next(W);
+                let e = (s + next(12)).min(W - 1);
+                if (s..=e).any(|x| taken[x as usize]) {
+                    continue;
+                }
+                row.occupy(s, e);
+                runs += 1;
+                (s..=e).for_each(|x| taken[x as usize] = true);
+                let free = |x: i32| !(0..W).contains(&x) || !taken[x as usize];
+                for x in 0..W {
+                    assert_eq!(row.get(x), !free(x), "column {x}");
+                }
+                let mut longest = 0;
+                let mut current = 0;
+                for x in 0..W {
+                    current = if free(x) { current + 1 } else { 0 };
+                    longest = longest.max(current);
+                }
+                assert_eq!(row.max_gap(0, W), longest);
+                for _ in 0..50 {
+                    let (x, a) = (next(W + 20) - 10, next(6));
+                    let b = a + next(15);
+                    let expected = (x..)
+                        .find(|&p| (p + a..=p + b).all(free))
+                        .expect("the row is free past its last run");
+                    assert_eq!(row.next_fit(x, a, b), expected, "x {x} a {a} b {b}");
+                }
+            }
+        }
+        assert!(runs > 200, "{runs}");
     }
 }

@@ -301,9 +301,9 @@ pub fn pack_charts(
 
 /// Fit-to-page packings by the horizons alone whose efficiency (placed UV area / page area) is
 /// below this are packed again with hole filling ([`hole`]), keeping the better. Measured (one
-/// run each, 1024², padding 2, 16 rotations, load 1.6): hole filling always on lifted
-/// 2CylinderEngine 0.314 → 0.523 but made other meshes' pack stage up to 2× slower for
-/// ±0.01 (armadillo 0.683 → 0.690 at 0.21 → 0.39 s, spot 0.666 → 0.650, torus 0.617 → 0.611).
+/// run each, 1024², padding 2, 16 rotations, load 1.6; 2CylinderEngine under load): hole
+/// filling always on lifted 2CylinderEngine 0.314 → 0.52 but made other meshes' pack stage up
+/// to 2× slower for ±0.01 (armadillo 0.683 → 0.690 at 0.21 → 0.39 s, spot 0.666 → 0.650, torus 0.617 → 0.611).
 pub const HOLE_FILL_BELOW: f64 = 0.60;
 
 impl PackOptions {
