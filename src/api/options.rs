@@ -107,6 +107,14 @@ pub struct OptionsJson {
     /// merging. Default 3; meshes above 500k faces get the first pass only.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub merge_passes: Option<usize>,
+    /// Largest chart the merge-back may make, as a fraction of the mesh's faces, (0, 1]; unions
+    /// of at most 4,096 faces are always tried. Absent: 0.1; `null`: no bound.
+    #[serde(
+        default,
+        deserialize_with = "explicit_null",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub merge_max_chart_fraction: Option<Option<f64>>,
     /// Fraction of edges kept as feature candidates, (0, 1], default 0.05.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub feature_fraction: Option<f64>,
@@ -178,6 +186,9 @@ impl OptionsJson {
         if let Some(n) = self.merge_passes {
             atlas.validate.merge_passes = n;
         }
+        if let Some(f) = self.merge_max_chart_fraction {
+            atlas.validate.merge_max_chart_fraction = f;
+        }
         if let Some(f) = self.feature_fraction {
             atlas.segment.lscm.feature_fraction = f;
         }
@@ -232,6 +243,7 @@ impl OptionsJson {
             max_stretch: Some(a.validate.max_stretch),
             max_area_ratio: a.validate.max_area_ratio,
             merge_passes: Some(a.validate.merge_passes),
+            merge_max_chart_fraction: Some(a.validate.merge_max_chart_fraction),
             feature_fraction: Some(a.segment.lscm.feature_fraction),
             // Rounded to 1e-9° so that 60 reads back as 60, not 59.99999999999999.
             hard_edge_angle_deg: Some(
@@ -273,7 +285,8 @@ mod tests {
     #[test]
     fn every_field_maps_and_round_trips() {
         let text = r#"{"resolution":[2048,512],"padding_texels":4,"texels_per_unit":300.5,
-            "rotations":4,"max_charts":12,"max_stretch":1.2,"max_area_ratio":3.0,"merge_passes":2,"feature_fraction":0.1,
+            "rotations":4,"max_charts":12,"max_stretch":1.2,"max_area_ratio":3.0,"merge_passes":2,
+            "merge_max_chart_fraction":0.25,"feature_fraction":0.1,
             "hard_edge_angle_deg":45.5,"solver":"hierarchical","uv_set":2,"output_format":"gltf"}"#;
         let o: OptionsJson = serde_json::from_str(text).unwrap();
         let s = o.to_settings().unwrap();
@@ -288,6 +301,7 @@ mod tests {
         assert_eq!(s.atlas.validate.max_area_ratio, Some(3.0));
         assert_eq!(s.atlas.validate.max_stretch, Some(1.2));
         assert_eq!(s.atlas.validate.merge_passes, 2);
+        assert_eq!(s.atlas.validate.merge_max_chart_fraction, Some(0.25));
         assert_eq!(s.atlas.segment.lscm.feature_fraction, 0.1);
         assert_eq!(
             s.atlas.segment.lscm.hard_edge_angle_rad,

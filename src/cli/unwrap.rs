@@ -72,6 +72,10 @@ pub struct OptionFlags {
     /// pass only on meshes above 500k triangles).
     #[arg(long)]
     pub merge_passes: Option<usize>,
+    /// Largest chart the merge-back may make, as a fraction of the mesh's faces, (0, 1], or
+    /// `none` (unions of at most 4,096 faces are always tried). Default 0.1.
+    #[arg(long, value_parser = parse_fraction)]
+    pub merge_max_chart_fraction: Option<OrNone>,
     /// Fraction of edges kept as feature candidates, (0, 1]. Default 0.05.
     #[arg(long)]
     pub feature_fraction: Option<f64>,
@@ -104,6 +108,7 @@ impl OptionFlags {
             max_stretch: self.max_stretch.map(|b| b.0),
             max_area_ratio: self.max_area_ratio,
             merge_passes: self.merge_passes,
+            merge_max_chart_fraction: self.merge_max_chart_fraction.map(|b| b.0),
             feature_fraction: self.feature_fraction,
             hard_edge_angle_deg: self.hard_edge_angle_deg.map(|b| b.0),
             solver: self.solver,
@@ -141,6 +146,10 @@ fn parse_or_none(s: &str, what: &str, example: &str) -> Result<OrNone, String> {
 
 fn parse_max_stretch(s: &str) -> Result<OrNone, String> {
     parse_or_none(s, "a stretch bound", "1.1")
+}
+
+fn parse_fraction(s: &str) -> Result<OrNone, String> {
+    parse_or_none(s, "a fraction", "0.1")
 }
 
 fn parse_hard_edge_angle(s: &str) -> Result<OrNone, String> {

@@ -53,7 +53,7 @@ pub use grow::{distance_to_features, grow_charts, GrownCharts};
 pub use options::{Lscm2002Options, SegmentMethod, SegmentOptions};
 pub use validate::{
     validate_charts, validate_charts_with_monitor, ChartDefect, LocatedMap, ValidateOptions,
-    ValidatedCharts,
+    ValidatedCharts, LATE_MERGE_MAX_FACES, MERGE_CAP_FLOOR_FACES,
 };
 
 /// A chart of a [`Segmentation`], numbered by its lowest face id. Displayed as `C3`.

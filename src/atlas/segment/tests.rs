@@ -1191,3 +1191,51 @@ fn sock_chart_is_split_lengthwise_from_its_rim_into_two_flat_halves() {
         (tip, rim_face)
     );
 }
+
+#[test]
+fn merge_back_respects_the_chart_size_bound() {
+    // A flat 100 × 60 grid (12,000 faces) given as 20 strips of 3 rows (600 faces each): every
+    // union of strips is a valid disk, so only the size bound stops the merging.
+    let mesh = build(&fixtures::grid(100, 60));
+    let mut strips: Vec<Vec<FaceId>> = vec![Vec::new(); 20];
+    for f in mesh.faces() {
+        let y = mesh.face_positions(f).iter().map(|p| p[1]).sum::<f64>() / 3.0;
+        strips[(y / 3.0) as usize].push(f);
+    }
+    let seg = finish(&mesh, strips, SegmentStats::default());
+    let largest = |v: &ValidatedCharts| v.segmentation.charts.iter().map(Vec::len).max();
+    let unbounded = ValidateOptions {
+        merge_passes: 8,
+        merge_max_chart_fraction: None,
+        ..Default::default()
+    };
+    let free = validate_charts(&mesh, &seg, &unbounded).expect("valid options");
+    assert!(
+        largest(&free) > Some(MERGE_CAP_FLOOR_FACES),
+        "test premise: unbounded merging makes a chart above the floor, {:?}",
+        largest(&free)
+    );
+    for (fraction, limit) in [(0.1, MERGE_CAP_FLOOR_FACES), (0.5, 6_000)] {
+        let bounded = ValidateOptions {
+            merge_max_chart_fraction: Some(fraction),
+            ..unbounded
+        };
+        let v = validate_charts(&mesh, &seg, &bounded).expect("valid options");
+        assert!(v.merges > 0, "{fraction}: no merge at all");
+        assert!(
+            largest(&v) <= Some(limit),
+            "{fraction}: a merged chart of {:?} faces, bound {limit}",
+            largest(&v)
+        );
+        assert!(v.segmentation.charts.len() > free.segmentation.charts.len());
+        assert_contract(&mesh, &v.segmentation);
+        assert_maps_contract(&mesh, &v);
+    }
+    for bad in [0.0, -0.1, 1.5, f64::NAN] {
+        let o = ValidateOptions {
+            merge_max_chart_fraction: Some(bad),
+            ..Default::default()
+        };
+        assert!(validate_charts(&mesh, &seg, &o).is_err(), "{bad} accepted");
+    }
+}
