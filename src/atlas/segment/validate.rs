@@ -139,14 +139,16 @@ pub struct ValidateOptions {
     pub max_stretch: Option<f64>,
     /// Passes of the merge-back of valid charts into a neighbour (see `merge_back`): the first
     /// pass tries only the small charts, later ones every chart; merging stops early after a
-    /// pass without a merge. A count; 0 disables merging. Default 3: on the corpus (one run,
-    /// release) the third pass is the last that merges anything (4 merges on armadillo, 1 on
-    /// spot) and more passes change only 2CylinderEngine, by one chart; 1 pass leaves
-    /// armadillo at 74 charts, 2 at 43, 3 at 39 (issue 4: at most 40), bunny at 28, 14 and 14,
-    /// for a global L2 stretch of 1.037 → 1.068 (armadillo) and 1.022 → 1.053 (bunny), both
-    /// within issue 5's 1.10. The later passes flatten unions of large charts and cost most of
-    /// the validation time (bunny: about 0.2 s of CPU for the first pass, 0.8 s for the other
-    /// two, one thread, machine under load). On meshes of more than [`LATE_MERGE_MAX_FACES`]
+    /// later pass without a merge. A count; 0 disables merging. Default 3: on the corpus (one
+    /// run, release, before [`Self::merge_max_chart_fraction`]) the third pass was the last
+    /// that merged anything (4 merges on armadillo, 1 on spot) and more passes changed only
+    /// 2CylinderEngine, by one chart. With the default chart size bound, 1, 2 and 3 passes
+    /// leave armadillo at 74, 45 and 39 charts (issue 4: at most 40) and bunny at 28, 21 and
+    /// 21, for a global L2 stretch of 1.037 → 1.062 (armadillo) and 1.022 → 1.037 (bunny),
+    /// within issue 5's 1.10 (one run each, release). The later passes flatten unions of large
+    /// charts and cost most of the validation time (without the bound, bunny: about 0.2 s of
+    /// CPU for the first pass, 0.8 s for the other two, one thread, machine under load). On
+    /// meshes of more than [`LATE_MERGE_MAX_FACES`]
     /// faces only the first pass runs: the later passes' cost grows with the mesh
     /// (beast_sub2_1M, 1.03M faces: 324 → 194 charts for 11.2 → 18.4 s of pipeline, over issue
     /// 5's 15 s).
