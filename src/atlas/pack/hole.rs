@@ -20,9 +20,8 @@
 //! texels (Chebyshev) from every other `F`; and the box lies within the page.
 //!
 //! Search: first fit per orientation, rows of the box top to bottom, columns left to right;
-//! among orientations the one whose grid starts highest wins (smallest `y`; measured on
-//! 2CylinderEngine: 0.567 in a 7.7 s pack stage, against 0.562 in 9.1 s for the grid ending
-//! highest), ties by `x`, then by orientation index: deterministic, and exhaustive (every position of the box is
+//! among orientations the one whose grid ends highest wins (smallest `y + height`), ties by
+//! `x`, then by orientation index: deterministic, and exhaustive (every position of the box is
 //! decided). A canvas row is skipped at once when one of the chart's rows is longer than its
 //! longest free run. Along a row all positions are tested at once, 64 per word: each chart row
 //! (the longest first, then the others spread out) clears the positions where its span meets
@@ -39,7 +38,7 @@
 //! run, load 3.7): the leapfrog search it replaces (a binary search per step, given up past
 //! 1024 steps per chart row) packed 0.525 in a 11.1 s pack stage; this one, exhaustive, with
 //! the first fit over the whole page and the padded-box order of `super::pack_charts`: 0.562
-//! in 9.1 s (0.567 in 7.6 s with the grid starting highest).
+//! in 9.1 s.
 use super::horizon::Placement;
 use super::place::{Orientation, EMPTY};
 
@@ -191,7 +190,7 @@ impl Occupancy {
     }
 
     /// The best position inside `bbox` (`[x0, y0, x1, y1)`, canvas texels) for one of the
-    /// `usable` orientations (module doc: first fit per orientation, the grid starting highest
+    /// `usable` orientations (module doc: first fit per orientation, the grid ending highest
     /// wins), or `None` when no orientation fits in the box. Does not modify the map.
     pub fn find(
         &self,
@@ -200,7 +199,7 @@ impl Occupancy {
         usable: &[bool],
     ) -> Option<Placement> {
         let [x0, y0, x1, y1] = bbox;
-        // (y, x, orientation).
+        // (y + height, x, orientation).
         let mut best: Option<(i32, i32, usize)> = None;
         let mut rows: Vec<(i32, i32, i32)> = Vec::new();
         let mut buffers = ScanBuffers::default();
@@ -247,8 +246,8 @@ impl Occupancy {
             rows[1..].sort_by_key(|&(r, _, _)| (r as u32).reverse_bits());
             let (x_lo, x_hi) = (x0, x1 - w);
             let mut y_hi = y1 - h;
-            if let Some((top, _, _)) = best {
-                y_hi = y_hi.min(top);
+            if let Some((end, _, _)) = best {
+                y_hi = y_hi.min(end - h);
             }
             'rows: for y in y0..=y_hi {
                 for &(r, a, b) in &rows {
@@ -256,21 +255,21 @@ impl Occupancy {
                         continue 'rows;
                     }
                 }
-                // Positions must beat the best so far: on its first row, only smaller x.
+                // Positions must beat the best so far: on its last row, only smaller x.
                 let x_end = match best {
-                    Some((top, bx, _)) if top == y => x_hi.min(bx - 1),
+                    Some((end, bx, _)) if end == y + h => x_hi.min(bx - 1),
                     _ => x_hi,
                 };
                 if let Some(x) = self.scan_row(y, x_lo, x_end, &rows, &mut buffers) {
-                    best = Some((y, x, k));
+                    best = Some((y + h, x, k));
                     break;
                 }
             }
         }
-        best.map(|(y, x, k)| Placement {
+        best.map(|(end, x, k)| Placement {
             orientation: k,
             x,
-            y,
+            y: end - orientations[k].height_texels as i32,
         })
     }
 

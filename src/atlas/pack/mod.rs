@@ -10,7 +10,7 @@
 //! each chart goes to the first position of the page where its padded footprint meets no
 //! placed footprint (exact occupancy of every placed chart, an exhaustive bit-parallel search:
 //! bottom-left fill). Measured (1024², padding 2, 16 rotations): 2CylinderEngine 0.314 by the
-//! horizons → 0.567; meshes that pack at 0.60 or more are packed by the horizons alone, as
+//! horizons → 0.562; meshes that pack at 0.60 or more are packed by the horizons alone, as
 //! before.
 //!
 //! **Stage contract (GUIDE.md).** Charts never overlap, keep `padding_texels` empty texels
@@ -307,8 +307,7 @@ pub fn pack_charts(
 /// charts would cover [`HOLE_ORDER_FILL`] of the page, grown by the padding on every side.
 /// The box, not the area, says how hard a chart is to fit (long thin or branched charts), and
 /// first fit packs the hard ones best while the page is empty. Measured on 2CylinderEngine
-/// (1024², padding 2, one run each, the grid ending highest winning among orientations): by
-/// area 0.553, by UV box 0.566, by padded UV box 0.5615 (0.567 with the grid starting highest).
+/// (1024², padding 2, one run each): by area 0.553, by UV box 0.566, by padded UV box 0.5615.
 fn padded_box_order(
     charts: &[PackChart<'_>],
     prepared: &[place::PreparedChart],
