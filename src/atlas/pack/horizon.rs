@@ -25,9 +25,11 @@
 //! padding 2, 16 rotations) this raised the efficiency from 0.624 to 0.650 for twice the search.
 //! The page bound keeps the box within `W × H` either way.
 //!
-//! On a page made by [`HorizonPage::with_holes`], [`HorizonPage::find`] first asks the page's
-//! [`Occupancy`] for a position inside the bounding box ([`super::hole`], an extension of the
-//! papers); every commit then records the chart's `F` in both.
+//! On a page made by [`HorizonPage::with_holes`], [`HorizonPage::find`] asks the page's
+//! [`Occupancy`] instead ([`super::hole`], an extension of the papers): first fit anywhere in
+//! the page-sized box centred in the canvas, so that charts also go into the space behind the
+//! horizons; every commit records the chart's `F` in both (the box of the `D`s stays inside
+//! that page-sized box, so the translation onto the page below holds).
 //!
 //! Invariant (the no-overlap guarantee, exact on the texel grid): a chart's padded footprint
 //! `D` never meets the footprint `F` of a chart already placed, because in each line it covers
@@ -107,11 +109,11 @@ impl HorizonPage {
         }
     }
 
-    /// An empty page like [`Self::new`] that also fills holes: each chart is first offered a
-    /// position inside the bounding box ([`super::hole`]).
+    /// An empty page like [`Self::new`] that packs by hole filling instead of the horizons:
+    /// each chart goes to the first fit in the page-sized box ([`super::hole`]).
     pub fn with_holes(width_texels: u32, height_texels: u32) -> Self {
         let mut page = Self::new(width_texels, height_texels);
-        page.occupancy = Some(Occupancy::new(2 * page.bound[1]));
+        page.occupancy = Some(Occupancy::new(2 * page.bound[0], 2 * page.bound[1]));
         page
     }
 
@@ -129,6 +131,25 @@ impl HorizonPage {
                 && o.width_texels <= i64::from(bw)
                 && o.height_texels <= i64::from(bh)
         };
+        // An orientation whose padded footprint repeats an earlier one's (small or symmetric
+        // charts) cannot do better: skip it.
+        let usable: Vec<bool> = (0..orientations.len())
+            .map(|k| {
+                let o = &orientations[k];
+                fits(o)
+                    && !orientations[..k].iter().any(|e| {
+                        e.width_texels == o.width_texels
+                            && e.height_texels == o.height_texels
+                            && e.dilated == o.dilated
+                    })
+            })
+            .collect();
+        // Hole filling ([`super::hole`]): first fit in the whole page-sized box centred in the
+        // canvas, from the first chart on (bottom-left fill); the horizons are not searched.
+        if let Some(occupancy) = &self.occupancy {
+            let page_box = [bw / 2, bh / 2, bw / 2 + bw, bh / 2 + bh];
+            return occupancy.find(page_box, orientations, &usable);
+        }
         let Some([x0, y0, x1, y1]) = self.bbox else {
             // First chart: the orientation with the smallest box, centred in the canvas.
             let (k, o) = orientations
@@ -150,26 +171,6 @@ impl HorizonPage {
         } else {
             [Side::PlusY, Side::MinusY, Side::PlusX, Side::MinusX]
         };
-        // An orientation whose padded footprint repeats an earlier one's (small or symmetric
-        // charts) cannot do better: skip it.
-        let usable: Vec<bool> = (0..orientations.len())
-            .map(|k| {
-                let o = &orientations[k];
-                fits(o)
-                    && !orientations[..k].iter().any(|e| {
-                        e.width_texels == o.width_texels
-                            && e.height_texels == o.height_texels
-                            && e.dilated == o.dilated
-                    })
-            })
-            .collect();
-        // Hole filling first (a position inside the box, [`super::hole`]): it never grows the
-        // box; the horizons only run when no orientation fits inside it.
-        if let Some(occupancy) = &self.occupancy {
-            if let Some(p) = occupancy.find([x0, y0, x1, y1], orientations, &usable) {
-                return Some(p);
-            }
-        }
         // `start`: the best of the sides searched before (a candidate must beat it strictly,
         // as in the reduction below). Waste is never negative, so a zero ends the search.
         let per_side = |side: Side, start: Best| -> Best {
