@@ -63,6 +63,8 @@
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.1 and Algorithm 1; the sharpness
 //! criterion is from Hubeli & Gross 2001 (the paper's reference \[11\]).
+use rayon::prelude::*;
+
 use crate::mesh::{HalfedgeId, TriangleMesh};
 
 use super::options::Lscm2002Options;
@@ -116,10 +118,11 @@ const STRING_TEST_SLACK: f64 = 1e-9;
 pub fn detect_features(mesh: &TriangleMesh, options: &Lscm2002Options) -> Features {
     let nh = mesh.num_halfedges();
     let mut sharpness_rad = vec![0.0; nh];
-    let mut ranked: Vec<(f64, HalfedgeId)> = Vec::new();
     // One normal per face, then the angle of `TriangleMesh::dihedral_angle_rad` (same formula,
-    // same bits) per edge: each normal is computed once instead of once per edge.
-    let normals: Vec<Option<[f64; 3]>> = mesh.faces().map(|f| mesh.face_normal(f)).collect();
+    // same bits) per edge: each normal is computed once instead of once per edge. Both in
+    // parallel (each value depends on its own face or edge only; collected in id order).
+    let faces: Vec<crate::mesh::FaceId> = mesh.faces().collect();
+    let normals: Vec<Option<[f64; 3]>> = faces.par_iter().map(|&f| mesh.face_normal(f)).collect();
     let dihedral = |h: HalfedgeId, o: HalfedgeId| {
         let n1 = normals[h.face().index()]?;
         let n2 = normals[o.face().index()]?;
@@ -131,10 +134,19 @@ pub fn detect_features(mesh: &TriangleMesh, options: &Lscm2002Options) -> Featur
         let d = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
         Some((c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt().atan2(d))
     };
-    for h in mesh.edges() {
-        let Some(o) = mesh.opposite(h) else { continue };
-        if let Some(a) = dihedral(h, o) {
+    let edges: Vec<HalfedgeId> = mesh.edges().collect();
+    let angles: Vec<Option<(f64, HalfedgeId)>> = edges
+        .par_iter()
+        .map(|&h| {
+            let o = mesh.opposite(h)?;
+            let a = dihedral(h, o)?;
             debug_assert_eq!(Some(a), mesh.dihedral_angle_rad(h));
+            Some((a, o))
+        })
+        .collect();
+    let mut ranked: Vec<(f64, HalfedgeId)> = Vec::with_capacity(edges.len());
+    for (&h, e) in edges.iter().zip(&angles) {
+        if let Some((a, o)) = *e {
             sharpness_rad[h.index()] = a;
             sharpness_rad[o.index()] = a;
             ranked.push((a, h));
@@ -151,11 +163,24 @@ pub fn detect_features(mesh: &TriangleMesh, options: &Lscm2002Options) -> Featur
     if ranked.is_empty() {
         return out;
     }
-    // Sharpest first, ties by edge id: the processing order of step 3.
-    ranked.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    // Sharpest first, ties by edge id: the processing order of step 3. Only the edges at least
+    // as sharp as τ (the k-th) are visited, so only they are sorted: the k first by a selection,
+    // then those after them that tie with τ (the same prefix as a full sort's, same order).
+    let order =
+        |a: &(f64, HalfedgeId), b: &(f64, HalfedgeId)| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1));
     let k =
         ((options.feature_fraction * ranked.len() as f64).ceil() as usize).clamp(1, ranked.len());
+    ranked.select_nth_unstable_by(k - 1, order);
     let tau = ranked[k - 1].0;
+    let mut end = k;
+    for i in k..ranked.len() {
+        if ranked[i].0.total_cmp(&tau).is_eq() {
+            ranked.swap(end, i);
+            end += 1;
+        }
+    }
+    ranked.truncate(end);
+    ranked.sort_unstable_by(order);
     if tau.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return out;
     }

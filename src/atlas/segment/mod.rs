@@ -45,6 +45,8 @@ mod tests;
 
 use std::collections::VecDeque;
 
+use rayon::prelude::*;
+
 use crate::atlas::parameterize::ChartMesh;
 use crate::mesh::{FaceData, FaceId, HalfedgeId, TriangleMesh, VertexId};
 
@@ -422,6 +424,21 @@ pub(super) fn enforce_disks(
             label[f.index()] = i as u32;
         }
     }
+    // The given items that are already disks, found in parallel: an item's test reads only
+    // whether faces carry its own label, and no face changes to or from an item's label before
+    // that item is popped, so this is the test the loop below would make (same result, same
+    // order of `done`).
+    let already_disk: Vec<bool> = work
+        .par_iter()
+        .enumerate()
+        .map(|(i, faces)| {
+            let inside = |f: FaceId| label[f.index()] == i as u32;
+            !faces.is_empty()
+                && flood(mesh, &faces[..1], &inside, faces).len() == faces.len()
+                && disk_check_connected(mesh, faces, &inside).is_ok()
+        })
+        .collect();
+    let given = work.len() as u32;
     let mut next_label = work.len() as u32;
     let mut done: Vec<Vec<FaceId>> = Vec::new();
     let mut pending: Vec<(u32, Vec<FaceId>)> = work
@@ -434,6 +451,10 @@ pub(super) fn enforce_disks(
     let splits_before = stats.disk_splits;
     while let Some((id, faces)) = pending.pop() {
         if faces.is_empty() {
+            continue;
+        }
+        if id < given && already_disk[id as usize] {
+            done.push(faces);
             continue;
         }
         let inside = |f: FaceId| label[f.index()] == id;
