@@ -64,8 +64,8 @@
 //! Valid charts are then merged into a neighbour when the merged chart is still a disk and
 //! passes all tests ([`ValidateOptions::merge_passes`] passes, default 3, smallest first, two
 //! neighbours tried each, no union above a tenth of the mesh's faces unless it is small,
-//! [`ValidateOptions::merge_max_chart_fraction`]; see `merge_back`). Whether a union is a disk is decided from the two
-//! charts' intersection alone (`union_is_disk`, linear in the smaller chart), not by a disk
+//! [`ValidateOptions::merge_max_chart_fraction`]; see `merge_back`). Whether a union is a disk
+//! is decided from the two charts' intersection alone (`union_is_disk`, linear in the smaller chart), not by a disk
 //! check of the union.
 //!
 //! **Zero-area faces** (3-D degenerate: collinear corners or a repeated vertex,
