@@ -6,7 +6,7 @@
 //! normalized page UVs. On top of the papers' packers, where the horizons leave much of the
 //! page empty (fit-to-page efficiency below [`HOLE_FILL_BELOW`], or a fixed density needing
 //! more than one page), the charts are packed again with *hole filling* ([`hole`]) and the
-//! better packing is kept: in the order of [`padded_box_order`] (largest padded UV box first),
+//! better packing is kept: in the order of `padded_box_order` (largest padded UV box first),
 //! each chart goes to the first position of the page where its padded footprint meets no
 //! placed footprint (exact occupancy of every placed chart, an exhaustive bit-parallel search:
 //! bottom-left fill). Measured (1024², padding 2, 16 rotations): 2CylinderEngine 0.314 by the
@@ -342,7 +342,7 @@ fn padded_box_order(
     by_key.into_iter().map(|k| order[k]).collect()
 }
 
-/// Fill ratio of the density of [`padded_box_order`].
+/// Fill ratio of the density of `padded_box_order`.
 pub const HOLE_ORDER_FILL: f64 = 0.55;
 
 /// Fit-to-page packings by the horizons alone whose efficiency (placed UV area / page area) is
