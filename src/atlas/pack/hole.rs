@@ -360,6 +360,7 @@ fn shift_and(v: &mut [u64], shift: usize) {
 #[cfg(test)]
 mod tests {
     use super::{shift_and, Occupancy, Row, ScanBuffers};
+    use crate::atlas::pack::test_charts::xorshift64;
 
     /// A row of `W` columns filled by random disjoint runs, checked after every run against a
     /// plain array: occupancy per column, the longest free run, and the first fit of random
@@ -368,12 +369,7 @@ mod tests {
     fn a_row_agrees_with_a_plain_array() {
         const W: i32 = 160;
         let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = |n: i32| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed % n as u64) as i32
-        };
+        let mut next = |n: i32| (xorshift64(&mut seed) % n as u64) as i32;
         let mut runs = 0;
         for _trial in 0..20 {
             let mut row = Row::empty();
@@ -411,12 +407,7 @@ mod tests {
         const W: i32 = 300;
         const H: i32 = 24;
         let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = |n: i32| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed % n as u64) as i32
-        };
+        let mut next = |n: i32| (xorshift64(&mut seed) % n as u64) as i32;
         let (mut found, mut none) = (0, 0);
         for _canvas in 0..30 {
             let mut occ = Occupancy::new(W, H);
@@ -466,12 +457,7 @@ mod tests {
     #[test]
     fn shift_and_matches_a_plain_array() {
         let mut seed = 0x1234_5678_9abc_def1u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut next = || xorshift64(&mut seed);
         for n in 1..6usize {
             for shift in [0usize, 1, 5, 63, 64, 65, 100, 127, 128, 200, 400] {
                 let v: Vec<u64> = (0..n).map(|_| next() | next()).collect();

@@ -653,12 +653,7 @@ mod tests {
         })
     }
 
-    fn xorshift(state: &mut u64) -> f64 {
-        *state ^= *state << 13;
-        *state ^= *state >> 7;
-        *state ^= *state << 17;
-        (*state >> 11) as f64 / (1u64 << 53) as f64
-    }
+    use crate::atlas::pack::test_charts::xorshift;
 
     #[test]
     fn conservative_raster_never_misses_a_touched_texel_and_adds_only_near_ones() {

@@ -102,11 +102,18 @@ pub fn triangle(p: [[f64; 2]; 3]) -> OwnedChart {
     OwnedChart::planar(p.to_vec(), vec![[0, 1, 2]], 1.0)
 }
 
-fn xorshift(state: &mut u64) -> f64 {
+/// The next value of Marsaglia's xorshift64 generator (`state` must not be 0): the
+/// deterministic randomness of the pack tests and fixtures.
+pub fn xorshift64(state: &mut u64) -> u64 {
     *state ^= *state << 13;
     *state ^= *state >> 7;
     *state ^= *state << 17;
-    (*state >> 11) as f64 / (1u64 << 53) as f64
+    *state
+}
+
+/// A uniform value in `[0, 1)` from [`xorshift64`].
+pub fn xorshift(state: &mut u64) -> f64 {
+    (xorshift64(state) >> 11) as f64 / (1u64 << 53) as f64
 }
 
 /// `n` charts of mixed shapes and sizes (discs, L-shapes, straight and bent strips, single
