@@ -60,6 +60,12 @@
 //! Cost: `O(E log E)` for the threshold sort, plus per curve step a depth-first search over at most
 //! `d^L` strings (`d` ≈ 3 forward edges per vertex, `L = max_string_length`).
 //!
+//! Parallelism (same curves at any thread count): candidates are taken in order, but with more
+//! than one rayon thread a window of them is expanded at once against the tags at the window's
+//! start, and a speculative curve is used only when no curve accepted in between changed a tag
+//! it read (else it is grown again); most candidates are rejected (on armadillo 214 of 4759
+//! curves are kept), so most speculations stand.
+//!
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.1 and Algorithm 1; the sharpness
 //! criterion is from Hubeli & Gross 2001 (the paper's reference \[11\]).
@@ -185,37 +191,65 @@ pub fn detect_features(mesh: &TriangleMesh, options: &Lscm2002Options) -> Featur
         return out;
     }
     out.threshold_rad = Some(tau);
-    let mut grower = Grower {
+    let mut grower = Grower::new(
         mesh,
-        sharp: &out.sharpness_rad,
+        &out.sharpness_rad,
         tau,
-        max_len: options.max_string_length.max(1),
-        is_feature: vec![false; nh],
-        is_neighbor: vec![false; nh],
-        vertex_feature: vec![false; mesh.num_vertices()],
-        vertex_stamp: vec![0; mesh.num_vertices()],
-        stamp: 0,
-        max_out: mesh
-            .vertices()
-            .map(|v| {
-                mesh.outgoing_halfedges(v)
-                    .map(|g| out.sharpness_rad[g.index()])
-                    .fold(0.0, f64::max)
-            })
-            .collect(),
-        max_sharp: out.sharpness_rad.iter().copied().fold(0.0, f64::max),
+        options.max_string_length.max(1),
+    );
+    let keep = |e: &Expansion| {
+        e.curve.len() > options.min_feature_length || (e.anchored && e.curve.len() > 1)
     };
-    for &(a, h) in &ranked {
-        if a < tau {
-            break;
+    let candidates: Vec<HalfedgeId> = ranked
+        .iter()
+        .take_while(|&&(a, _)| a >= tau)
+        .map(|&(_, h)| h)
+        .collect();
+    let mut scratch = Scratch::default();
+    let threads = rayon::current_num_threads();
+    if threads <= 1 {
+        for &h in &candidates {
+            if !grower.usable(h) {
+                continue;
+            }
+            let e = grower.expand(h, &mut scratch);
+            if keep(&e) {
+                grower.accept(&e.curve);
+                out.curves.push(e.curve);
+            }
         }
-        if grower.is_feature[h.index()] || grower.is_neighbor[h.index()] {
-            continue;
-        }
-        let (curve, anchored) = grower.expand(h);
-        if curve.len() > options.min_feature_length || (anchored && curve.len() > 1) {
-            grower.accept(&curve);
-            out.curves.push(curve);
+    } else {
+        // Speculation, same result as the loop above: the candidates of a window are expanded
+        // in parallel against the state at the window's start; each expansion is then taken in
+        // candidate order if no curve accepted since has touched the vertices it read (else
+        // it is expanded again against the current state). An expansion is a pure function of
+        // that state, so the curves do not depend on the thread count.
+        let window = SPECULATION_WINDOW_PER_THREAD * threads;
+        for chunk in candidates.chunks(window) {
+            let base = grower.accepts;
+            let todo: Vec<HalfedgeId> = chunk
+                .iter()
+                .copied()
+                .filter(|&h| grower.usable(h))
+                .collect();
+            let speculated: Vec<Expansion> = todo
+                .par_iter()
+                .map_init(Scratch::default, |s, &h| grower.expand(h, s))
+                .collect();
+            for (&h, e) in todo.iter().zip(speculated) {
+                if !grower.usable(h) {
+                    continue;
+                }
+                let e = if grower.unchanged_since(&e, base) {
+                    e
+                } else {
+                    grower.expand(h, &mut scratch)
+                };
+                if keep(&e) {
+                    grower.accept(&e.curve);
+                    out.curves.push(e.curve);
+                }
+            }
         }
     }
     out.is_feature = grower.is_feature;
@@ -290,22 +324,46 @@ fn add_hard_edges(mesh: &TriangleMesh, features: &mut Features, angle_rad: f64) 
     }
 }
 
+/// Candidates expanded in parallel per window and per rayon thread (speculation in
+/// [`detect_features`]): small enough that few speculations are spoilt by a curve accepted
+/// earlier in the window, large enough to amortise the parallel dispatch.
+const SPECULATION_WINDOW_PER_THREAD: usize = 32;
+
+/// An outgoing half-edge of a vertex in [`Grower::ring`]: its id, the vertex it points to, its
+/// sharpness (radians) and the position of its far end (model units), side by side for the
+/// depth-first search (one contiguous read per search node).
+#[derive(Clone, Copy)]
+struct Out {
+    sharp: f64,
+    to_m: [f64; 3],
+    g: u32,
+    w: u32,
+}
+
 /// State of Algorithm 1 across curves.
 struct Grower<'a> {
     mesh: &'a TriangleMesh,
     sharp: &'a [f64],
     tau: f64,
     max_len: usize,
+    /// The outgoing half-edges of every vertex in rotation order (the order of
+    /// `TriangleMesh::outgoing_halfedges`), vertex `v`'s at `ring[ring_start[v]..ring_start[v + 1]]`:
+    /// one contiguous read per search node instead of a walk through `opposite` and
+    /// `corner_vertex`.
+    ring: Vec<Out>,
+    ring_start: Vec<u32>,
     /// Feature tag per half-edge (both halves set).
     is_feature: Vec<bool>,
     /// Feature-neighbour tag per half-edge (both halves set).
     is_neighbor: Vec<bool>,
     /// True at the vertices of kept curves: a string may end there (docking).
     vertex_feature: Vec<bool>,
-    /// `vertex_stamp[v] == stamp` marks the vertices of the curve being grown; a new curve takes a
-    /// new stamp, so a rejected curve needs no clean-up.
-    vertex_stamp: Vec<u32>,
-    stamp: u32,
+    /// Curves accepted so far.
+    accepts: u32,
+    /// Per vertex, the number of the last accepted curve (1-based, 0 for none) that changed a
+    /// tag an expansion scanning this vertex's rotation reads: those with a vertex of the curve
+    /// on a face around this vertex. See [`Grower::unchanged_since`].
+    changed_at: Vec<u32>,
     /// Per vertex, the largest sharpness of its outgoing half-edges (radians): with
     /// `max_sharp`, the upper bound that prunes `dfs`.
     max_out: Vec<f64>,
@@ -324,9 +382,147 @@ struct Best {
     len: usize,
 }
 
-impl Grower<'_> {
-    fn in_curve(&self, v: crate::mesh::VertexId) -> bool {
-        self.vertex_stamp[v.index()] == self.stamp
+/// One curve grown by [`Grower::expand`], not yet accepted.
+struct Expansion {
+    /// The curve's edges in curve order.
+    curve: Vec<HalfedgeId>,
+    /// Closed into a loop, or joined to existing features at both ends.
+    anchored: bool,
+    /// Every vertex whose outgoing half-edges' tags the expansion read (with repeats).
+    scanned: Vec<u32>,
+}
+
+/// Working memory of one expansion, reused across expansions.
+#[derive(Default)]
+struct Scratch {
+    /// The vertices of the curve being grown.
+    curve: VertexSet,
+    /// The vertices of the string being searched, after the curve's end.
+    path: Vec<u32>,
+    /// See [`Expansion::scanned`].
+    scanned: Vec<u32>,
+}
+
+/// A set of vertex ids (open addressing, linear probing), cleared in time proportional to its
+/// size: the vertices of one curve, without a per-mesh array per thread.
+#[derive(Default)]
+struct VertexSet {
+    /// `u32::MAX` for an empty slot; the length is a power of two (or 0).
+    slots: Vec<u32>,
+    /// Indices of the occupied slots.
+    used: Vec<u32>,
+}
+
+impl VertexSet {
+    const EMPTY: u32 = u32::MAX;
+
+    fn clear(&mut self) {
+        for &k in &self.used {
+            self.slots[k as usize] = Self::EMPTY;
+        }
+        self.used.clear();
+    }
+
+    fn slot(&self, v: u32) -> usize {
+        // Fibonacci hashing; `slots.len()` is a power of two.
+        (v.wrapping_mul(0x9E37_79B9) as usize) & (self.slots.len() - 1)
+    }
+
+    fn contains(&self, v: u32) -> bool {
+        if self.slots.is_empty() {
+            return false;
+        }
+        let mask = self.slots.len() - 1;
+        let mut k = self.slot(v);
+        loop {
+            match self.slots[k] {
+                Self::EMPTY => return false,
+                x if x == v => return true,
+                _ => k = (k + 1) & mask,
+            }
+        }
+    }
+
+    fn insert(&mut self, v: u32) {
+        if 2 * (self.used.len() + 1) > self.slots.len() {
+            let old: Vec<u32> = self.used.iter().map(|&k| self.slots[k as usize]).collect();
+            self.slots = vec![Self::EMPTY; (2 * self.slots.len()).max(64)];
+            self.used.clear();
+            for x in old {
+                self.insert_unchecked(x);
+            }
+        }
+        self.insert_unchecked(v);
+    }
+
+    fn insert_unchecked(&mut self, v: u32) {
+        let mask = self.slots.len() - 1;
+        let mut k = self.slot(v);
+        loop {
+            match self.slots[k] {
+                Self::EMPTY => {
+                    self.slots[k] = v;
+                    self.used.push(k as u32);
+                    return;
+                }
+                x if x == v => return,
+                _ => k = (k + 1) & mask,
+            }
+        }
+    }
+}
+
+impl<'a> Grower<'a> {
+    fn new(mesh: &'a TriangleMesh, sharp: &'a [f64], tau: f64, max_len: usize) -> Self {
+        let nv = mesh.num_vertices();
+        let ring: Vec<Out> = (0..nv as u32)
+            .into_par_iter()
+            .flat_map_iter(|v| {
+                mesh.outgoing_halfedges(crate::mesh::VertexId(v))
+                    .map(|g| Out {
+                        sharp: sharp[g.index()],
+                        to_m: mesh.position(mesh.to_vertex(g)),
+                        g: g.0,
+                        w: mesh.to_vertex(g).0,
+                    })
+            })
+            .collect();
+        // Each half-edge leaves exactly one vertex, so `ring` is grouped by vertex in id order.
+        let mut ring_start = vec![0u32; nv + 1];
+        for o in &ring {
+            ring_start[mesh.from_vertex(HalfedgeId(o.g)).index() + 1] += 1;
+        }
+        for v in 0..nv {
+            ring_start[v + 1] += ring_start[v];
+        }
+        let max_out = (0..nv)
+            .map(|v| {
+                ring[ring_start[v] as usize..ring_start[v + 1] as usize]
+                    .iter()
+                    .map(|o| o.sharp)
+                    .fold(0.0, f64::max)
+            })
+            .collect();
+        let nh = mesh.num_halfedges();
+        Grower {
+            mesh,
+            sharp,
+            tau,
+            max_len,
+            ring,
+            ring_start,
+            is_feature: vec![false; nh],
+            is_neighbor: vec![false; nh],
+            vertex_feature: vec![false; nv],
+            accepts: 0,
+            changed_at: vec![0; nv],
+            max_out,
+            max_sharp: sharp.iter().copied().fold(0.0, f64::max),
+        }
+    }
+
+    fn out_of(&self, v: u32) -> &[Out] {
+        &self.ring[self.ring_start[v as usize] as usize..self.ring_start[v as usize + 1] as usize]
     }
 
     fn direction(&self, h: HalfedgeId) -> [f64; 3] {
@@ -335,28 +531,39 @@ impl Grower<'_> {
         [b[0] - a[0], b[1] - a[1], b[2] - a[2]]
     }
 
-    /// Grows one curve from `start` in both directions; returns its edges in curve order, and
-    /// whether it is anchored (closed into a loop, or joined to existing features at both ends).
-    fn expand(&mut self, start: HalfedgeId) -> (Vec<HalfedgeId>, bool) {
-        self.stamp = self.stamp.wrapping_add(1);
-        if self.stamp == 0 {
-            // Wrapped after 2^32 curves: reset so that stale stamps cannot alias.
-            self.vertex_stamp.iter_mut().for_each(|s| *s = u32::MAX);
-            self.stamp = 1;
-        }
-        let stamp = self.stamp;
+    /// True when no curve accepted after the first `base` ones changed a tag that `e` read:
+    /// `e` is then exactly what [`Grower::expand`] would return now. An accepted curve changes
+    /// only tags of edges with an endpoint on the curve and of the curve's vertices, and an
+    /// expansion reads only tags of the outgoing edges of the vertices it scans and of their
+    /// far ends, so a change it could see marks a vertex it scanned (`changed_at`).
+    fn unchanged_since(&self, e: &Expansion, base: u32) -> bool {
+        e.scanned
+            .iter()
+            .all(|&v| self.changed_at[v as usize] <= base)
+    }
+
+    /// Grows one curve from `start` in both directions (its edges in curve order, and whether
+    /// it is anchored: closed into a loop, or joined to existing features at both ends).
+    /// Reads the tags only; `s` is working memory.
+    fn expand(&self, start: HalfedgeId, s: &mut Scratch) -> Expansion {
         let mesh = self.mesh;
-        self.vertex_stamp[mesh.from_vertex(start).index()] = stamp;
-        self.vertex_stamp[mesh.to_vertex(start).index()] = stamp;
+        s.curve.clear();
+        s.scanned.clear();
+        s.curve.insert(mesh.from_vertex(start).0);
+        s.curve.insert(mesh.to_vertex(start).0);
         let mut forward: Vec<HalfedgeId> = vec![start];
         let mut backward: Vec<HalfedgeId> = Vec::new();
         let mut docked_ends = 0usize;
         let Some(reverse) = mesh.opposite(start) else {
-            return (forward, false);
+            return Expansion {
+                curve: forward,
+                anchored: false,
+                scanned: std::mem::take(&mut s.scanned),
+            };
         };
         for (dir, first) in [(0usize, start), (1, reverse)] {
             let mut cur = first;
-            // Each step stamps a new vertex, so at most `num_vertices` steps.
+            // Each step adds a new vertex to the curve, so at most `num_vertices` steps.
             for _ in 0..mesh.num_vertices() {
                 let other_end = if dir == 0 {
                     mesh.from_vertex(start)
@@ -366,14 +573,18 @@ impl Grower<'_> {
                         .map_or(mesh.to_vertex(start), |h| mesh.to_vertex(*h))
                 };
                 if let Some(close) =
-                    self.closing_edge(cur, other_end, forward.len() + backward.len())
+                    self.closing_edge(cur, other_end, forward.len() + backward.len(), s)
                 {
                     if dir == 0 {
                         forward.push(close);
                     } else {
                         backward.push(close);
                     }
-                    return (join(forward, backward, mesh), true);
+                    return Expansion {
+                        curve: join(forward, backward, mesh),
+                        anchored: true,
+                        scanned: std::mem::take(&mut s.scanned),
+                    };
                 }
                 let mut best = Best {
                     margin: f64::NEG_INFINITY,
@@ -382,14 +593,14 @@ impl Grower<'_> {
                     len: 0,
                 };
                 let d0 = self.direction(cur);
-                let mut path: Vec<crate::mesh::VertexId> = Vec::with_capacity(self.max_len + 1);
+                s.path.clear();
                 self.dfs(
-                    cur,
+                    mesh.to_vertex(cur).0,
                     d0,
                     self.sharp[cur.index()],
                     1,
                     None,
-                    &mut path,
+                    s,
                     &mut best,
                 );
                 let Some(next) = best.second else { break };
@@ -406,11 +617,15 @@ impl Grower<'_> {
                     docked_ends += 1;
                     break;
                 }
-                self.vertex_stamp[mesh.to_vertex(next).index()] = stamp;
+                s.curve.insert(mesh.to_vertex(next).0);
                 cur = next;
             }
         }
-        (join(forward, backward, mesh), docked_ends == 2)
+        Expansion {
+            curve: join(forward, backward, mesh),
+            anchored: docked_ends == 2,
+            scanned: std::mem::take(&mut s.scanned),
+        }
     }
 
     /// An edge from the end of `cur` to the curve's other end that closes a loop, if the curve
@@ -420,52 +635,61 @@ impl Grower<'_> {
         cur: HalfedgeId,
         other_end: crate::mesh::VertexId,
         len: usize,
+        s: &mut Scratch,
     ) -> Option<HalfedgeId> {
         if len < 2 {
             return None;
         }
-        self.mesh
-            .outgoing_halfedges(self.mesh.to_vertex(cur))
-            .find(|&g| {
-                self.mesh.to_vertex(g) == other_end
-                    && self.sharp[g.index()] >= self.tau
-                    && self.usable(g)
-            })
+        let v = self.mesh.to_vertex(cur).0;
+        s.scanned.push(v);
+        self.out_of(v)
+            .iter()
+            .find(|o| o.w == other_end.0 && o.sharp >= self.tau && self.usable(HalfedgeId(o.g)))
+            .map(|o| HalfedgeId(o.g))
     }
 
     fn usable(&self, g: HalfedgeId) -> bool {
         !self.is_feature[g.index()] && !self.is_neighbor[g.index()]
     }
 
-    /// Depth-first search over strings continuing `last`; `depth` edges are in the string so far
-    /// (including `h′`), `sum` is their total sharpness, `second` the string's second edge.
+    /// Depth-first search over strings continuing a string that ends at vertex `v`; `depth`
+    /// edges are in the string so far (including `h′`), `sum` is their total sharpness,
+    /// `second` the string's second edge; `s.path` holds the string's vertices after `h′`.
     #[allow(clippy::too_many_arguments)]
     fn dfs(
         &self,
-        last: HalfedgeId,
+        v: u32,
         d0: [f64; 3],
         sum: f64,
         depth: usize,
         second: Option<HalfedgeId>,
-        path: &mut Vec<crate::mesh::VertexId>,
+        s: &mut Scratch,
         best: &mut Best,
     ) {
         let mut extended = false;
         if depth < self.max_len {
-            let v = self.mesh.to_vertex(last);
-            for g in self.mesh.outgoing_halfedges(v) {
-                let w = self.mesh.to_vertex(g);
-                if self.in_curve(w) || path.contains(&w) || self.is_feature[g.index()] {
+            s.scanned.push(v);
+            let pv = self.mesh.position(crate::mesh::VertexId(v));
+            for &Out {
+                sharp,
+                to_m: pw,
+                g,
+                w,
+            } in self.out_of(v)
+            {
+                if s.curve.contains(w) || s.path.contains(&w) || self.is_feature[g as usize] {
                     continue;
                 }
-                let d = self.direction(g);
+                // `direction(g)`: `g` leaves `v`.
+                let d = [pw[0] - pv[0], pw[1] - pv[1], pw[2] - pv[2]];
                 if d[0] * d0[0] + d[1] * d0[1] + d[2] * d0[2] < 0.0 {
                     continue;
                 }
-                if self.vertex_feature[w.index()] {
+                let g = HalfedgeId(g);
+                if self.vertex_feature[w as usize] {
                     // Docking on an existing feature ends the string; it only has to be as
                     // sharp as τ on average over its own length.
-                    let s = sum + self.sharp[g.index()];
+                    let s = sum + sharp;
                     let margin = s - (depth + 1) as f64 * self.tau * (1.0 - STRING_TEST_SLACK);
                     if margin > best.margin {
                         *best = Best {
@@ -487,12 +711,12 @@ impl Grower<'_> {
                 // cost). `expand` only uses a best margin ≥ 0, and `best` changes only on a
                 // strictly greater margin, so pruning below max(best, 0) never changes the
                 // result (the 1e-9 slack covers rounding of the sums).
-                let s = sum + self.sharp[g.index()];
+                let total = sum + sharp;
                 let per_edge = self.tau * (1.0 - STRING_TEST_SLACK);
                 let left = self.max_len - (depth + 1);
-                let bound = s - (depth + 1) as f64 * per_edge
+                let bound = total - (depth + 1) as f64 * per_edge
                     + if left > 0 {
-                        (self.max_out[w.index()] - per_edge).max(0.0)
+                        (self.max_out[w as usize] - per_edge).max(0.0)
                             + (left - 1) as f64 * (self.max_sharp - per_edge).max(0.0)
                     } else {
                         0.0
@@ -500,17 +724,9 @@ impl Grower<'_> {
                 if bound + 1e-9 * (1.0 + bound.abs()) < best.margin.max(0.0) {
                     continue;
                 }
-                path.push(w);
-                self.dfs(
-                    g,
-                    d0,
-                    sum + self.sharp[g.index()],
-                    depth + 1,
-                    second.or(Some(g)),
-                    path,
-                    best,
-                );
-                path.pop();
+                s.path.push(w);
+                self.dfs(w, d0, total, depth + 1, second.or(Some(g)), s, best);
+                s.path.pop();
             }
         }
         // A string ends here when it cannot or may not grow; only strings with a second edge can
@@ -529,6 +745,7 @@ impl Grower<'_> {
     /// Tags a kept curve's edges as features and the other edges at its vertices as neighbours.
     fn accept(&mut self, curve: &[HalfedgeId]) {
         let mesh = self.mesh;
+        self.accepts += 1;
         for &h in curve {
             self.vertex_feature[mesh.from_vertex(h).index()] = true;
             self.vertex_feature[mesh.to_vertex(h).index()] = true;
@@ -540,6 +757,10 @@ impl Grower<'_> {
         for &h in curve {
             for v in [mesh.from_vertex(h), mesh.to_vertex(h)] {
                 for g in mesh.outgoing_halfedges(v) {
+                    // Every vertex of a face around `v` may read a tag changed here.
+                    for u in mesh.face_vertices(g.face()) {
+                        self.changed_at[u.index()] = self.accepts;
+                    }
                     // `g` leaves v and `prev(g)` enters it: together every edge at v.
                     for e in [g, g.prev()] {
                         if !self.is_feature[e.index()] {

@@ -374,13 +374,39 @@ fn sorted_faces(faces: &[FaceId]) -> std::borrow::Cow<'_, [FaceId]> {
 
 /// Faces reachable from `seeds` through glued edges between faces that are `inside`, in
 /// breadth-first order. `faces` lists (at least) every face that is `inside` (any order); the
-/// visited set is a flag per entry of it, found by binary search (no per-mesh array, no tree).
+/// visited set is a flag per entry of it, found by binary search (no per-mesh array, no tree),
+/// or, for a chart with at least 1/16 of the mesh's faces, a flag per face of the mesh (zeroed
+/// lazily by the allocator, so its cost is about the chart's; no search per visit). Both give
+/// the same order.
 fn flood(
     mesh: &TriangleMesh,
     seeds: &[FaceId],
     inside: &dyn Fn(FaceId) -> bool,
     faces: &[FaceId],
 ) -> Vec<FaceId> {
+    if faces.len().saturating_mul(16) >= mesh.num_faces() {
+        let mut seen = vec![false; mesh.num_faces()];
+        let mut order = Vec::with_capacity(faces.len());
+        let mut queue = VecDeque::new();
+        for &s in seeds {
+            // A seed outside `faces` is not visited (as with the search below); past the
+            // seeds, `inside` implies being in `faces` (the contract).
+            if s.index() < seen.len() && !seen[s.index()] && faces.contains(&s) {
+                seen[s.index()] = true;
+                queue.push_back(s);
+            }
+        }
+        while let Some(f) = queue.pop_front() {
+            order.push(f);
+            for g in mesh.face_neighbors(f).into_iter().flatten() {
+                if !seen[g.index()] && inside(g) {
+                    seen[g.index()] = true;
+                    queue.push_back(g);
+                }
+            }
+        }
+        return order;
+    }
     let sorted = sorted_faces(faces);
     let mut seen = vec![false; sorted.len()];
     let mut mark = |f: FaceId| match sorted.binary_search(&f) {
@@ -535,12 +561,34 @@ pub(super) fn grow_two(
     if a == b {
         return (faces.to_vec(), Vec::new());
     }
-    // Side per face of the chart (by binary search in the sorted faces): 0 unset, 1 `a`, 2 `b`.
+    // Side per face of the chart: 0 unset, 1 `a`, 2 `b`; by binary search in the sorted faces,
+    // or, for a chart with at least 1/16 of the mesh's faces, per face of the mesh (as in
+    // `flood`; the same sides).
     let sorted = sorted_faces(faces);
-    let mut side = vec![0u8; sorted.len()];
-    let slot = |f: FaceId| sorted.binary_search(&f).ok();
+    let dense = faces.len().saturating_mul(16) >= mesh.num_faces();
+    let mut side = vec![
+        0u8;
+        if dense {
+            mesh.num_faces()
+        } else {
+            sorted.len()
+        }
+    ];
+    let slot = |f: FaceId| {
+        if dense {
+            // Past the seeds (checked below), only faces of the chart are `inside` (the
+            // contract).
+            Some(f.index()).filter(|&k| k < mesh.num_faces())
+        } else {
+            sorted.binary_search(&f).ok()
+        }
+    };
     let mut queue = VecDeque::new();
     for (seed, s) in [(a, 1u8), (b, 2u8)] {
+        if dense && !faces.contains(&seed) {
+            // Not a face of the chart: no side, as with the search.
+            continue;
+        }
         if let Some(k) = slot(seed) {
             side[k] = s;
             queue.push_back(seed);
@@ -560,17 +608,18 @@ pub(super) fn grow_two(
             }
         }
     }
+    let side_of = |i: usize, f: FaceId| if dense { side[f.index()] } else { side[i] };
     let half_a: Vec<FaceId> = sorted
         .iter()
-        .zip(&side)
-        .filter(|(_, &s)| s != 2)
-        .map(|(&f, _)| f)
+        .enumerate()
+        .filter(|&(i, &f)| side_of(i, f) != 2)
+        .map(|(_, &f)| f)
         .collect();
     let half_b = sorted
         .iter()
-        .zip(&side)
-        .filter(|(_, &s)| s == 2)
-        .map(|(&f, _)| f)
+        .enumerate()
+        .filter(|&(i, &f)| side_of(i, f) == 2)
+        .map(|(_, &f)| f)
         .collect();
     (half_a, half_b)
 }
