@@ -190,14 +190,21 @@ pub const FIT_TOLERANCE: f64 = 3e-3;
 /// so after the bracket closes, `lo · (1 + k · FIT_PROBE_STEP)` for `k = 1..=FIT_PROBES` are
 /// packed too and the largest that fits wins (never less than the bracket's own result).
 /// Measured (1024², padding 2, 16 rotations): bunny 0.638 → 0.651, spot 0.583 → 0.619,
-/// armadillo 0.638 → 0.651 (4 probes: spot 0.631, one more packing).
+/// armadillo 0.638 → 0.651 (4 probes: spot 0.631, one more packing). Not used when the charts
+/// are packed again with hole filling: there, on 2CylinderEngine, every probe failed with 4, 8
+/// and 16 angles for the small charts (one run each) while costing 3 of its 10 packings.
 pub const FIT_PROBES: usize = 3;
 
 /// Charts whose placed UV area is below this many texels² try only the quarter turns of the
 /// diameter-vertical orientation (when `rotations` is a multiple of 4): a subset of the
 /// angles, a quarter of the search. Such charts are a few texels across, where finer angles
 /// change little, and they can number thousands (2CylinderEngine: 2,332 packed charts; its
-/// pack stage measured 19.9 s → 5.3 s on one thread, packing 0.273 → 0.285).
+/// pack stage measured 19.9 s → 5.3 s on one thread, packing 0.273 → 0.285). Not when the
+/// charts are packed again with hole filling ([`hole`]): there a small chart goes into a gap
+/// between placed charts, where the angle matters. Measured on 2CylinderEngine (1024², padding
+/// 2, 2 threads, one run each, the hole-filling packing kept): quarter turns 0.5615 (pack stage
+/// 7.3 s), 8 angles 0.5728 (11.8 s), all 16 angles 0.5808 (24.2 s with the probes of
+/// [`FIT_PROBES`], which all failed).
 pub const SMALL_CHART_TEXELS: f64 = 1024.0;
 
 /// Density step of the probes of [`FIT_PROBES`], as a ratio.
@@ -520,16 +527,20 @@ impl Context<'_, '_> {
                 use rayon::prelude::*;
                 let end = (n + BATCH).min(self.order.len());
                 let prepared = self.prepared;
+                let holes = self.holes;
                 batch = self.order[n..end]
                     .par_iter()
                     .map(|&j| {
-                        // Small charts: the quarter turns only (a subset of the angles).
+                        // Small charts: the quarter turns only (a subset of the angles), except
+                        // when filling holes, where every angle is tried
+                        // ([`SMALL_CHART_TEXELS`]).
                         let texels = prepared[j].area_m2 * texels_per_unit * texels_per_unit;
-                        let rotations = if texels < SMALL_CHART_TEXELS && o.rotations % 4 == 0 {
-                            o.rotations.min(4)
-                        } else {
-                            o.rotations
-                        };
+                        let rotations =
+                            if texels < SMALL_CHART_TEXELS && o.rotations % 4 == 0 && !holes {
+                                o.rotations.min(4)
+                            } else {
+                                o.rotations
+                            };
                         place::orientations(
                             &self.charts[j],
                             &prepared[j],
@@ -739,9 +750,11 @@ fn fit_to_page(
         };
         d = clamp_d(next);
     }
+    // Probes above the bracket (not when filling holes, [`FIT_PROBES`]); the largest density
+    // that fits wins.
+    let probes = if ctx.holes { 0 } else { FIT_PROBES };
     if let Some(lo) = fit.as_ref().map(|f| f.texels_per_unit) {
-        // Probes above the bracket; the largest density that fits wins.
-        for k in 1..=FIT_PROBES {
+        for k in 1..=probes {
             let d = clamp_d(lo * (1.0 + FIT_PROBE_STEP * k as f64));
             let t = ctx.run(d, false, &mut progress)?;
             if t.unplaced == 0 {
