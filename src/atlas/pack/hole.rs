@@ -226,7 +226,7 @@ impl Occupancy {
             .filter_map(|k| {
                 let found = self.first_fit(bbox, &orientations[k], &gaps, || {
                     let b = bound.load(Ordering::Relaxed);
-                    (b != u64::MAX).then(|| ((b >> 32) as i32, b as u32 as i32))
+                    (b != u64::MAX).then_some(((b >> 32) as i32, b as u32 as i32))
                 })?;
                 bound.fetch_min(key(found.0, found.1), Ordering::Relaxed);
                 Some((found.0, found.1, k))
