@@ -75,7 +75,8 @@ pub struct PackOptions {
     /// Rotations tried per chart, evenly spaced over a full turn after orienting the chart's
     /// maximum diameter vertically; `1` means the diameter-vertical orientation only. `>= 1`.
     /// Default 16 (isocharts-2004 §6). Charts smaller than [`SMALL_CHART_TEXELS`] try at most
-    /// the 4 quarter turns when this is a multiple of 4.
+    /// the 4 quarter turns when this is a multiple of 4, except when the charts are packed
+    /// again with hole filling ([`hole`]).
     pub rotations: u32,
 }
 
