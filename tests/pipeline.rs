@@ -8,7 +8,9 @@
 //! those counts; two runs give identical bits; cancellation stops at the stage asked for.
 use std::ops::ControlFlow;
 
-use texatlas::atlas::{generate, AtlasError, AtlasOptions, NoProgress, Progress, Stage};
+use texatlas::atlas::{
+    generate, AtlasError, AtlasOptions, NoProgress, Progress, Stage, TexelDensity,
+};
 use texatlas::mesh::{fixtures, MeshInput, TriangleMesh};
 
 fn meshes() -> Vec<(&'static str, MeshInput)> {
@@ -144,6 +146,13 @@ fn a_plane_is_one_chart_with_no_stretch() {
         "a square chart should fill most of the page: {}",
         atlas.report.packing_efficiency
     );
+    // Fit-to-page searches the density: a bracket and a bisection, then the probes.
+    assert!(atlas.stats.pack_trials > 3, "{:?}", atlas.stats);
+    // At the density found, one packing.
+    let mut options = AtlasOptions::default();
+    options.pack.density = TexelDensity::TexelsPerUnit(atlas.stats.texels_per_unit);
+    let fixed = generate(&mesh, &options, &mut NoProgress).expect("atlas");
+    assert_eq!(fixed.stats.pack_trials, 1, "{:?}", fixed.stats);
 }
 
 #[test]

@@ -104,6 +104,8 @@ pub struct PipelineJson {
     pub charts_hierarchical: usize,
     /// Texel density used, texels per model unit.
     pub texels_per_unit: f64,
+    /// Packings run to choose the density (1 at a fixed density).
+    pub pack_trials: u32,
     /// Charts made only of degenerate faces (zero area or a repeated vertex): not packed, their
     /// corners sit on a coincident vertex of a packed chart (zero UV area).
     pub degenerate_charts: usize,
@@ -189,6 +191,7 @@ impl ReportJson {
                 charts_direct: s.charts_direct,
                 charts_hierarchical: s.charts_hierarchical,
                 texels_per_unit: s.texels_per_unit,
+                pack_trials: s.pack_trials,
                 degenerate_charts: s.degenerate_charts,
             },
             timings_s: TimingsJsonS {

@@ -123,6 +123,9 @@ pub struct PipelineStats {
     pub charts_hierarchical: usize,
     /// The texel density used, texels per model unit.
     pub texels_per_unit: f64,
+    /// Packings run to choose the density ([`pack::Packing::trials`]: 1 at a fixed density; with
+    /// fit-to-page, every trial density, hole filling's included), a cost diagnostic.
+    pub pack_trials: u32,
     /// Charts made only of degenerate faces (zero area or a repeated vertex): not packed, their
     /// corners take the UV of a coincident vertex of a packed chart (see [`generate`]).
     pub degenerate_charts: usize,
@@ -264,6 +267,7 @@ pub fn generate(
         }
     };
     stats.texels_per_unit = packing.texels_per_unit;
+    stats.pack_trials = packing.trials;
     stats.degenerate_charts = charts.len() - packed.len();
     let mut corner_uvs = vec![[[0.0f32; 2]; 3]; mesh.num_faces()];
     let mut face_chart = vec![0u32; mesh.num_faces()];
