@@ -452,11 +452,7 @@ fn fit_to_page_density_packs_again_at_that_fixed_density() {
     let fit = PackOptions::default();
     let (packing, check) = pack(&charts, &fit);
     assert_guarantees(&check, "fit to page");
-    assert!(
-        packing.trials > 2,
-        "{} trials",
-        packing.trials
-    );
+    assert!(packing.trials > 2, "{} trials", packing.trials);
     let fixed = PackOptions {
         density: TexelDensity::TexelsPerUnit(packing.texels_per_unit),
         ..fit

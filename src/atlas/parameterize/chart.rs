@@ -291,16 +291,44 @@ impl ChartTopology {
     ///
     /// Returns `(a, b, shortest path length a→b in model units)`.
     pub fn farthest_boundary_pair(&self, positions_m: &[[f64; 3]]) -> (u32, u32, f64) {
+        // Edge lengths once for both sweeps, aligned with `neighbors` (NaN: an index outside
+        // `positions_m`, skipped; the topology is a public struct and may not match).
+        let n = self.neighbor_ptr.len().saturating_sub(1);
+        let mut length_m = vec![f64::NAN; self.neighbors.len()];
+        for v in 0..n {
+            let (Some(&lo), Some(&hi)) = (self.neighbor_ptr.get(v), self.neighbor_ptr.get(v + 1))
+            else {
+                continue;
+            };
+            let Some(&pv) = positions_m.get(v) else {
+                continue;
+            };
+            for k in lo..hi.min(self.neighbors.len()) {
+                if let Some(&pw) = positions_m.get(self.neighbors[k] as usize) {
+                    length_m[k] = norm3(sub(pw, pv));
+                }
+            }
+        }
+        let mut dist = vec![f64::INFINITY; n];
+        let mut heap = BinaryHeap::new();
         let first = self.boundary_loop.first().copied().unwrap_or(0);
-        let (a, _) = self.farthest_boundary_from(first, positions_m);
-        let (b, d) = self.farthest_boundary_from(a, positions_m);
+        let (a, _) = self.farthest_boundary_from(first, &length_m, &mut dist, &mut heap);
+        dist.fill(f64::INFINITY);
+        let (b, d) = self.farthest_boundary_from(a, &length_m, &mut dist, &mut heap);
         (a, b, d)
     }
 
-    fn farthest_boundary_from(&self, source: u32, positions_m: &[[f64; 3]]) -> (u32, f64) {
-        let n = self.neighbor_ptr.len().saturating_sub(1);
-        let mut dist = vec![f64::INFINITY; n];
-        let mut heap = BinaryHeap::new();
+    /// Dijkstra from `source` over the edges of `length_m` (aligned with `neighbors`, NaN
+    /// skipped) into `dist` (all infinite on entry; `heap` empty on entry and exit): the
+    /// farthest boundary vertex and its distance.
+    fn farthest_boundary_from(
+        &self,
+        source: u32,
+        length_m: &[f64],
+        dist: &mut [f64],
+        heap: &mut BinaryHeap<HeapEntry>,
+    ) -> (u32, f64) {
+        let n = dist.len();
         if (source as usize) < n {
             dist[source as usize] = 0.0;
             heap.push(HeapEntry {
@@ -312,14 +340,17 @@ impl ChartTopology {
             if d > dist[v as usize] {
                 continue;
             }
-            for &w in self.neighbors_of(v) {
-                // `.get`: the topology is a public struct and may not match `positions_m`.
-                let (Some(&pw), Some(&pv)) =
-                    (positions_m.get(w as usize), positions_m.get(v as usize))
-                else {
+            let (lo, hi) = (
+                self.neighbor_ptr[v as usize],
+                self.neighbor_ptr[v as usize + 1],
+            );
+            for k in lo..hi.min(length_m.len()) {
+                let len = length_m[k];
+                if len.is_nan() {
                     continue;
-                };
-                let nd = d + norm3(sub(pw, pv));
+                }
+                let w = self.neighbors[k];
+                let nd = d + len;
                 let Some(slot) = dist.get_mut(w as usize) else {
                     continue;
                 };

@@ -1058,10 +1058,23 @@ fn merge_back(
         }
         None
     };
+    // Both charts' faces are ascending and disjoint: their union, ascending, by one merge.
     let union_of = |i: usize, j: usize, done: &[(Vec<FaceId>, LocatedMap)]| {
-        let mut union = done[j].0.clone();
-        union.extend_from_slice(&done[i].0);
-        union.sort_unstable();
+        let (a, b) = (&done[i].0, &done[j].0);
+        let mut union = Vec::with_capacity(a.len() + b.len());
+        let (mut x, mut y) = (0, 0);
+        while x < a.len() && y < b.len() {
+            if a[x] < b[y] {
+                union.push(a[x]);
+                x += 1;
+            } else {
+                union.push(b[y]);
+                y += 1;
+            }
+        }
+        union.extend_from_slice(&a[x..]);
+        union.extend_from_slice(&b[y..]);
+        debug_assert!(union.windows(2).all(|w| w[0] < w[1]));
         union
     };
     let passes = if mesh.num_faces() > LATE_MERGE_MAX_FACES {
