@@ -156,6 +156,11 @@ impl Occupancy {
         }
     }
 
+    /// Texels occupied (debug).
+    pub fn occupied(&self) -> i64 {
+        self.occupied_texels
+    }
+
     /// Marks texels `x0..=x1` of row `y` occupied (inside the canvas, `x0 <= x1`).
     pub fn occupy(&mut self, y: i32, x0: i32, x1: i32) {
         self.occupied_texels += i64::from(x1 - x0) + 1;
@@ -220,23 +225,126 @@ impl Occupancy {
         // non-negative); `u64::MAX` while there is none.
         let bound = AtomicU64::new(u64::MAX);
         let key = |end: i32, x: i32| (u64::from(end as u32) << 32) | u64::from(x as u32);
-        let best = (0..orientations.len())
+        let slack = exp_param("TX_SLACK", -1);
+        if slack < 0 {
+            let best = (0..orientations.len())
+                .into_par_iter()
+                .filter(|&k| usable[k])
+                .filter_map(|k| {
+                    let rows = d_rows(&orientations[k])?;
+                    let found = self.first_fit(
+                        bbox,
+                        &orientations[k],
+                        &rows,
+                        &gaps,
+                        || {
+                            let b = bound.load(Ordering::Relaxed);
+                            (b != u64::MAX).then_some(((b >> 32) as i32, b as u32 as i32))
+                        },
+                        None,
+                    )?;
+                    bound.fetch_min(key(found.0, found.1), Ordering::Relaxed);
+                    Some((found.0, found.1, k))
+                })
+                .min();
+            return best.map(|(end, x, k)| Placement {
+                orientation: k,
+                x,
+                y: end - orientations[k].height_texels as i32,
+            });
+        }
+        let slack = slack as i32;
+        let mode = exp_param("TX_SCORE", 0);
+        let multi = exp_param("TX_MULTI", 0) != 0;
+        let found: Vec<(i32, i32, usize, u64, u64)> = (0..orientations.len())
             .into_par_iter()
             .filter(|&k| usable[k])
-            .filter_map(|k| {
-                let found = self.first_fit(bbox, &orientations[k], &gaps, || {
+            .flat_map_iter(|k| {
+                let o = &orientations[k];
+                let Some(rows) = d_rows(o) else {
+                    return Vec::new();
+                };
+                let mut cands = Vec::new();
+                let bound_fn = || {
                     let b = bound.load(Ordering::Relaxed);
-                    (b != u64::MAX).then_some(((b >> 32) as i32, b as u32 as i32))
-                })?;
-                bound.fetch_min(key(found.0, found.1), Ordering::Relaxed);
-                Some((found.0, found.1, k))
+                    (b != u64::MAX).then_some(((b >> 32) as i32, i32::MAX))
+                };
+                let first = if multi {
+                    self.first_fit(bbox, o, &rows, &gaps, bound_fn, Some((slack, &mut cands)))
+                } else {
+                    let b = || bound_fn().map(|(e, x)| (e + slack, x));
+                    let f = self.first_fit(bbox, o, &rows, &gaps, b, None);
+                    cands.extend(f);
+                    f
+                };
+                let Some(first) = first else {
+                    return Vec::new();
+                };
+                bound.fetch_min(key(first.0, 0), Ordering::Relaxed);
+                let ring = ring_runs(&rows, o.height_texels as i32);
+                let len: u64 = ring.iter().map(|&(_, a, b)| (b - a + 1) as u64).sum();
+                cands
+                    .into_iter()
+                    .map(|(end, x)| {
+                        let y = end - o.height_texels as i32;
+                        (end, x, k, self.contact(bbox, &ring, x, y), len.max(1))
+                    })
+                    .collect()
             })
-            .min();
-        best.map(|(end, x, k)| Placement {
+            .collect();
+        let end_min = found.iter().map(|f| f.0).min()?;
+        let better = |a: &(i32, i32, usize, u64, u64), b: &(i32, i32, usize, u64, u64)| {
+            // a strictly better than b
+            let (sa, sb) = match mode {
+                1 => (a.3 as u128, b.3 as u128),
+                _ => (a.3 as u128 * b.4 as u128, b.3 as u128 * a.4 as u128),
+            };
+            sa > sb || (sa == sb && (a.0, a.1, a.2) < (b.0, b.1, b.2))
+        };
+        let mut best: Option<&(i32, i32, usize, u64, u64)> = None;
+        for f in found.iter().filter(|f| f.0 <= end_min + slack) {
+            if best.is_none_or(|b| better(f, b)) {
+                best = Some(f);
+            }
+        }
+        best.map(|&(end, x, k, _, _)| Placement {
             orientation: k,
             x,
             y: end - orientations[k].height_texels as i32,
         })
+    }
+
+    /// Occupied texels (or outside `bbox`) among the ring runs placed at `(x, y)`.
+    fn contact(&self, bbox: [i32; 4], ring: &[(i32, i32, i32)], x: i32, y: i32) -> u64 {
+        let [x0, y0, x1, y1] = bbox;
+        let mut n = 0u64;
+        for &(r, a, b) in ring {
+            let cy = y + r;
+            let (s, e) = (x + a, x + b);
+            if cy < y0 || cy >= y1 {
+                n += (e - s + 1) as u64;
+                continue;
+            }
+            let (is, ie) = (s.max(x0), e.min(x1 - 1));
+            n += (e - s + 1 - (ie - is + 1).max(0)) as u64;
+            if is <= ie {
+                n += self.count_bits(cy as usize, is as usize, ie as usize);
+            }
+        }
+        n
+    }
+
+    /// Occupied bits of row `y` in columns `s..=e`.
+    fn count_bits(&self, y: usize, s: usize, e: usize) -> u64 {
+        let row = &self.bits[y * self.words_per_row..][..self.words_per_row];
+        let mut n = 0u64;
+        for k in s / 64..=e / 64 {
+            let lo = if k == s / 64 { s % 64 } else { 0 };
+            let hi = if k == e / 64 { e % 64 } else { 63 };
+            let m = (u64::MAX >> (63 - hi)) & (u64::MAX << lo);
+            n += u64::from((row[k] & m).count_ones());
+        }
+        n
     }
 
     /// The first fit of one orientation in `bbox`: its least `(y + height, x)`, or `None` when
@@ -246,22 +354,19 @@ impl Occupancy {
         &self,
         bbox: [i32; 4],
         o: &Orientation,
+        rows: &[(i32, i32, i32)],
         gaps: &[i32],
         bound: impl Fn() -> Option<(i32, i32)>,
+        mut collect: Option<(i32, &mut Vec<(i32, i32)>)>,
     ) -> Option<(i32, i32)> {
+        let mut own_end: Option<i32> = None;
         let [x0, y0, x1, y1] = bbox;
-        let d = o.dilated.as_ref()?;
+        o.dilated.as_ref()?;
         let (w, h) = (o.width_texels as i32, o.height_texels as i32);
         if w > x1 - x0 || h > y1 - y0 {
             return None;
         }
-        let mut rows: Vec<(i32, i32, i32)> = d
-            .rows
-            .iter()
-            .enumerate()
-            .filter(|(_, &e)| e != EMPTY)
-            .map(|(r, &(a, b))| (r as i32, a, b))
-            .collect();
+        let mut rows: Vec<(i32, i32, i32)> = rows.to_vec();
         if rows.is_empty() {
             return None;
         }
@@ -285,10 +390,22 @@ impl Occupancy {
         'rows: for y in y0..=y1 - h {
             // Positions must not come after the best so far: rows ending below it are not
             // searched, and on its last row only columns up to its own.
-            let x_end = match bound() {
-                Some((end, _)) if y + h > end => return None,
-                Some((end, bx)) if y + h == end => x_hi.min(bx),
-                _ => x_hi,
+            let x_end = if let Some((slack, out)) = collect.as_ref() {
+                let limit = match (bound(), own_end) {
+                    (Some((e, _)), Some(o)) => Some(e.min(o)),
+                    (Some((e, _)), None) => Some(e),
+                    (None, o) => o,
+                };
+                if limit.is_some_and(|l| y + h > l + *slack) {
+                    return out.first().copied();
+                }
+                x_hi
+            } else {
+                match bound() {
+                    Some((end, _)) if y + h > end => return None,
+                    Some((end, bx)) if y + h == end => x_hi.min(bx),
+                    _ => x_hi,
+                }
             };
             for &(r, a, b) in &rows {
                 if gaps[(y - y0 + r) as usize] < b - a + 1 {
@@ -296,10 +413,33 @@ impl Occupancy {
                 }
             }
             if let Some(x) = self.scan_row(y, x_lo, x_end, &rows, &mut buffers) {
-                return Some((y + h, x));
+                let Some((slack, out)) = collect.as_mut() else {
+                    return Some((y + h, x));
+                };
+                // Every run of fitting positions: its first and last.
+                let fit = &buffers.fit;
+                let bit = |j: usize| j < 64 * fit.len() && (fit[j / 64] >> (j % 64)) & 1 == 1;
+                let n = (x_end - x_lo + 1) as usize;
+                let mut j = (x - x_lo) as usize;
+                while j < n {
+                    if bit(j) {
+                        let start = j;
+                        while j + 1 < n && bit(j + 1) {
+                            j += 1;
+                        }
+                        out.push((y + h, x_lo + start as i32));
+                        if j > start {
+                            out.push((y + h, x_lo + j as i32));
+                        }
+                    }
+                    j += 1;
+                }
+                let own = *own_end.get_or_insert(y + h);
+                let _ = slack;
+                let _ = own;
             }
         }
-        None
+        collect.and_then(|(_, out)| out.first().copied())
     }
 
     /// The smallest `x` in `x_lo..=x_hi` where every chart row `(r, a, b)` finds canvas row
@@ -359,6 +499,75 @@ impl Occupancy {
         let j = 64 * first + fit[first].trailing_zeros() as usize;
         Some(x_lo + j as i32)
     }
+}
+
+/// Experiment parameter from the environment.
+fn exp_param(name: &str, default: i64) -> i64 {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+/// The rows of `D` as runs `(row, first, last)`, row by row, left to right.
+fn d_rows(o: &Orientation) -> Option<Vec<(i32, i32, i32)>> {
+    let d = o.dilated.as_ref()?;
+    Some(match (&o.dilated_bits, std::env::var_os("TX_HULL")) {
+        (Some(bits), None) => {
+            let mut v = Vec::new();
+            bits.for_each_run(|r, a, b| v.push((r as i32, a as i32, b as i32)));
+            v
+        }
+        _ => d
+            .rows
+            .iter()
+            .enumerate()
+            .filter(|(_, &e)| e != EMPTY)
+            .map(|(r, &(a, b))| (r as i32, a, b))
+            .collect(),
+    })
+}
+
+/// The texels at Chebyshev distance exactly 1 from the runs `rows` (sorted by row, then
+/// column) of a set `h` rows tall: `(row, first, last)`, rows `-1..=h`.
+fn ring_runs(rows: &[(i32, i32, i32)], h: i32) -> Vec<(i32, i32, i32)> {
+    let mut by_row: Vec<Vec<(i32, i32)>> = vec![Vec::new(); h.max(0) as usize];
+    for &(r, a, b) in rows {
+        by_row[r as usize].push((a, b));
+    }
+    let mut out = Vec::new();
+    for r in -1..=h {
+        let mut iv: Vec<(i32, i32)> = (r - 1..=r + 1)
+            .filter(|&q| q >= 0 && q < h)
+            .flat_map(|q| by_row[q as usize].iter().map(|&(a, b)| (a - 1, b + 1)))
+            .collect();
+        iv.sort_unstable();
+        let mut merged: Vec<(i32, i32)> = Vec::new();
+        for (a, b) in iv {
+            match merged.last_mut() {
+                Some(m) if a <= m.1 + 1 => m.1 = m.1.max(b),
+                _ => merged.push((a, b)),
+            }
+        }
+        let own: &[(i32, i32)] = if (0..h).contains(&r) {
+            &by_row[r as usize]
+        } else {
+            &[]
+        };
+        for (s, e) in merged {
+            let mut c = s;
+            for &(a, b) in own.iter().filter(|&&(a, b)| b >= s && a <= e) {
+                if a > c {
+                    out.push((r, c, a - 1));
+                }
+                c = c.max(b + 1);
+            }
+            if c <= e {
+                out.push((r, c, e));
+            }
+        }
+    }
+    out
 }
 
 /// `v &= v >> shift` over a little-endian multi-word bit string (bit `j` of the result: bits

@@ -603,6 +603,10 @@ impl Context<'_, '_> {
                     });
                 }
                 None => {
+                    if std::env::var_os("TX_DEBUG").is_some() {
+                        let dims: Vec<(i64, i64)> = orients.iter().map(|o| (o.width_texels, o.height_texels)).collect();
+                        eprintln!("  fail chart {i} at {n}: area {:.0} dims {:?}", self.prepared[i].area_m2 * texels_per_unit * texels_per_unit, &dims[..4.min(dims.len())]);
+                    }
                     // This density fails; what is left tells the search how much to shrink.
                     trial.unplaced += 1;
                     trial.unplaced_area_m2 = self.prepared[i].area_m2
@@ -716,7 +720,22 @@ fn fit_to_page(
     let mut fit: Option<Trial> = None;
     let mut no_fit: Option<f64> = None;
     for _ in 0..MAX_FIT_TRIALS {
+        place::DEBUG_F.store(0, std::sync::atomic::Ordering::Relaxed);
+        place::DEBUG_F1.store(0, std::sync::atomic::Ordering::Relaxed);
         let t = ctx.run(d, false, &mut progress)?;
+        if std::env::var_os("TX_DEBUG").is_some() {
+            eprintln!("  sumF {} sumF1 {}", place::DEBUG_F.load(std::sync::atomic::Ordering::Relaxed), place::DEBUG_F1.load(std::sync::atomic::Ordering::Relaxed));
+            let placed = t.placed.iter().filter(|p| p.is_some()).count();
+            let page_area = f64::from(w) * f64::from(h);
+            let eff = (total_area - t.unplaced_area_m2) * d * d / page_area;
+            eprintln!(
+                "trial d {d:.6} holes {} placed {placed}/{} eff_placed {eff:.4} occupied {:.4} full_eff {:.4}",
+                ctx.holes,
+                ctx.order.len(),
+                t.pages[0].occupied() as f64 / page_area,
+                total_area * d * d / page_area
+            );
+        }
         // How much the packing would have to shrink (> 1) or could grow (< 1).
         let ratio = if t.unplaced == 0 {
             let [x0, y0, x1, y1] = t.pages[0].bbox().unwrap_or([0, 0, 1, 1]);

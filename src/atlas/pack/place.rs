@@ -343,6 +343,10 @@ pub struct Orientation {
     /// The texels of `F` themselves, same grid (for the occupancy of [`super::hole`]); `None`
     /// when not rasterized.
     pub footprint_bits: Option<FootprintBits>,
+    /// The texels of `D` themselves, same grid and window as `footprint_bits` (the exact
+    /// padded footprint that [`super::hole`] tests, row run by row run); `None` when not
+    /// rasterized.
+    pub dilated_bits: Option<FootprintBits>,
 }
 
 /// The texels of a footprint `F` on its orientation's grid: a rasterized mask, a window of it
@@ -436,6 +440,7 @@ impl Orientation {
             dilated: self.dilated.as_ref().map(Extents::rotate90),
             footprint: self.footprint.as_ref().map(Extents::rotate90),
             footprint_bits: self.footprint_bits.as_ref().map(FootprintBits::rotate90),
+            dilated_bits: self.dilated_bits.as_ref().map(FootprintBits::rotate90),
         }
     }
 }
@@ -467,6 +472,13 @@ pub fn orientations(
             )
         })
         .collect();
+    if std::env::var_os("TX_DEBUG").is_some() {
+        if let Some(b) = out.first().and_then(|o| o.footprint_bits.as_ref()) {
+            use std::sync::atomic::Ordering::Relaxed;
+            DEBUG_F.fetch_add(b.mask.count(), Relaxed);
+            DEBUG_F1.fetch_add(b.mask.dilate(1).count(), Relaxed);
+        }
+    }
     if quarter {
         for k in direct..rotations {
             let prev = &out[k - direct];
@@ -490,6 +502,9 @@ pub fn orientations(
     }
     out
 }
+
+pub static DEBUG_F: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+pub static DEBUG_F1: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
 fn orient(
     chart: &PackChart<'_>,
@@ -544,6 +559,7 @@ fn orient(
         dilated: None,
         footprint: None,
         footprint_bits: None,
+        dilated_bits: None,
     };
     if dims[0] > i64::from(page_texels[0]) || dims[1] > i64::from(page_texels[1]) {
         return o;
@@ -605,7 +621,8 @@ fn orient(
         mask.set_span(padding_texels, padding_texels, padding_texels);
     }
     let f = Extents::of(&mask);
-    let d = Extents::of(&mask.dilate(padding_texels));
+    let dmask = std::sync::Arc::new(mask.dilate(padding_texels));
+    let d = Extents::of(&dmask);
     let mask = std::sync::Arc::new(mask);
     // Sampled footprints need not reach the grid's margin: trim the grid to `D` (the grid is
     // the chart's box for the packer).
@@ -615,6 +632,12 @@ fn orient(
         Some((first, last))
     };
     let (Some((x0, x1)), Some((y0, y1))) = (span(&d.cols), span(&d.rows)) else {
+        o.dilated_bits = Some(FootprintBits {
+            size: [mask.width(), mask.height()],
+            mask: dmask,
+            origin: [0, 0],
+            turns: 0,
+        });
         o.footprint_bits = Some(FootprintBits {
             size: [mask.width(), mask.height()],
             mask,
@@ -653,6 +676,12 @@ fn orient(
     o.height_texels = (y1 - y0 + 1) as i64;
     o.footprint = Some(cut(&f));
     o.dilated = Some(cut(&d));
+    o.dilated_bits = Some(FootprintBits {
+        mask: dmask,
+        origin: [x0 as u32, y0 as u32],
+        size: [(x1 - x0 + 1) as u32, (y1 - y0 + 1) as u32],
+        turns: 0,
+    });
     o.footprint_bits = Some(FootprintBits {
         mask,
         origin: [x0 as u32, y0 as u32],
