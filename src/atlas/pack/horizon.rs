@@ -114,11 +114,6 @@ impl HorizonPage {
         page
     }
 
-    /// Occupied texels (debug).
-    pub fn occupied(&self) -> i64 {
-        self.occupancy.as_ref().map_or(0, |o| o.occupied())
-    }
-
     /// Bounding box of the placed padded footprints in canvas texels, `[x0, y0, x1, y1)`.
     pub fn bbox(&self) -> Option<[i32; 4]> {
         self.bbox

@@ -208,6 +208,22 @@ pub const FIT_PROBES: usize = 3;
 /// [`FIT_PROBES`], which all failed).
 pub const SMALL_CHART_TEXELS: f64 = 1024.0;
 
+/// The rotations tried by the packing with hole filling ([`hole`]) for `rotations` asked:
+/// half as many again (16 → 24) when `rotations` is a multiple of 8 (so that the quarter
+/// turns still share footprints) and that stays within [`MAX_ROTATIONS`]; otherwise
+/// `rotations`. Hole filling places each chart in a gap of the page, where more angles
+/// find more fits. Measured on 2CylinderEngine (1024², padding 2, the contact-scored search of
+/// [`hole`], 2 threads, one run each, machine loaded): 16 angles 0.5966, 20 → 0.5967, 24 →
+/// 0.6018, 28 → 0.6037, 32 → 0.6037 (pack stage ×1.6 against 24).
+pub fn hole_rotations(rotations: u32) -> u32 {
+    let more = rotations + rotations / 2;
+    if rotations % 8 == 0 && more <= MAX_ROTATIONS {
+        more
+    } else {
+        rotations
+    }
+}
+
 /// Density step of the probes of [`FIT_PROBES`], as a ratio.
 pub const FIT_PROBE_STEP: f64 = 0.01;
 
@@ -539,6 +555,8 @@ impl Context<'_, '_> {
                         let rotations =
                             if texels < SMALL_CHART_TEXELS && o.rotations % 4 == 0 && !holes {
                                 o.rotations.min(4)
+                            } else if holes {
+                                hole_rotations(o.rotations)
                             } else {
                                 o.rotations
                             };
@@ -603,10 +621,6 @@ impl Context<'_, '_> {
                     });
                 }
                 None => {
-                    if std::env::var_os("TX_DEBUG").is_some() {
-                        let dims: Vec<(i64, i64)> = orients.iter().map(|o| (o.width_texels, o.height_texels)).collect();
-                        eprintln!("  fail chart {i} at {n}: area {:.0} dims {:?}", self.prepared[i].area_m2 * texels_per_unit * texels_per_unit, &dims[..4.min(dims.len())]);
-                    }
                     // This density fails; what is left tells the search how much to shrink.
                     trial.unplaced += 1;
                     trial.unplaced_area_m2 = self.prepared[i].area_m2
@@ -720,22 +734,7 @@ fn fit_to_page(
     let mut fit: Option<Trial> = None;
     let mut no_fit: Option<f64> = None;
     for _ in 0..MAX_FIT_TRIALS {
-        place::DEBUG_F.store(0, std::sync::atomic::Ordering::Relaxed);
-        place::DEBUG_F1.store(0, std::sync::atomic::Ordering::Relaxed);
         let t = ctx.run(d, false, &mut progress)?;
-        if std::env::var_os("TX_DEBUG").is_some() {
-            eprintln!("  sumF {} sumF1 {}", place::DEBUG_F.load(std::sync::atomic::Ordering::Relaxed), place::DEBUG_F1.load(std::sync::atomic::Ordering::Relaxed));
-            let placed = t.placed.iter().filter(|p| p.is_some()).count();
-            let page_area = f64::from(w) * f64::from(h);
-            let eff = (total_area - t.unplaced_area_m2) * d * d / page_area;
-            eprintln!(
-                "trial d {d:.6} holes {} placed {placed}/{} eff_placed {eff:.4} occupied {:.4} full_eff {:.4}",
-                ctx.holes,
-                ctx.order.len(),
-                t.pages[0].occupied() as f64 / page_area,
-                total_area * d * d / page_area
-            );
-        }
         // How much the packing would have to shrink (> 1) or could grow (< 1).
         let ratio = if t.unplaced == 0 {
             let [x0, y0, x1, y1] = t.pages[0].bbox().unwrap_or([0, 0, 1, 1]);

@@ -472,13 +472,6 @@ pub fn orientations(
             )
         })
         .collect();
-    if std::env::var_os("TX_DEBUG").is_some() {
-        if let Some(b) = out.first().and_then(|o| o.footprint_bits.as_ref()) {
-            use std::sync::atomic::Ordering::Relaxed;
-            DEBUG_F.fetch_add(b.mask.count(), Relaxed);
-            DEBUG_F1.fetch_add(b.mask.dilate(1).count(), Relaxed);
-        }
-    }
     if quarter {
         for k in direct..rotations {
             let prev = &out[k - direct];
@@ -502,9 +495,6 @@ pub fn orientations(
     }
     out
 }
-
-pub static DEBUG_F: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-pub static DEBUG_F1: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
 fn orient(
     chart: &PackChart<'_>,
