@@ -932,6 +932,75 @@ mod tests {
     }
 
     #[test]
+    fn dilated_bits_are_the_chebyshev_dilation_of_the_footprint_in_every_turn() {
+        // The texels of `D` that hole filling tests are exactly the grid texels within
+        // `padding` (Chebyshev) of a texel of `F`, and their per-row hull is `D`'s extents.
+        let set = crate::atlas::pack::test_charts::mixed_set(15, 7);
+        let mut concave = 0;
+        for (i, owned) in set.iter().enumerate() {
+            let chart = owned.as_pack_chart();
+            let prep = prepare_chart(i, &chart).unwrap();
+            for density in [4.0, 23.0] {
+                for (k, o) in orientations(&chart, &prep, density, 8, 2, [1024, 1024])
+                    .iter()
+                    .enumerate()
+                {
+                    let (Some(d), Some(f), Some(db)) =
+                        (&o.dilated, &o.footprint_bits, &o.dilated_bits)
+                    else {
+                        continue;
+                    };
+                    let (w, h) = (o.width_texels as i32, o.height_texels as i32);
+                    let mut fset = vec![false; (w * h) as usize];
+                    f.for_each_run(|r, a, b| {
+                        for c in a..=b {
+                            fset[(r * w as u32 + c) as usize] = true;
+                        }
+                    });
+                    let mut got = vec![false; (w * h) as usize];
+                    let mut runs_per_row = vec![0; h as usize];
+                    db.for_each_run(|r, a, b| {
+                        runs_per_row[r as usize] += 1;
+                        for c in a..=b {
+                            got[(r * w as u32 + c) as usize] = true;
+                        }
+                    });
+                    concave += usize::from(runs_per_row.iter().any(|&n| n > 1));
+                    for y in 0..h {
+                        for x in 0..w {
+                            let near = (y - 2..=y + 2).any(|v| {
+                                (x - 2..=x + 2).any(|u| {
+                                    (0..w).contains(&u)
+                                        && (0..h).contains(&v)
+                                        && fset[(v * w + u) as usize]
+                                })
+                            });
+                            assert_eq!(
+                                got[(y * w + x) as usize],
+                                near,
+                                "chart {i} orientation {k} texel ({x}, {y})"
+                            );
+                        }
+                        let row: Vec<i32> = (0..w).filter(|&x| got[(y * w + x) as usize]).collect();
+                        let hull = match (row.first(), row.last()) {
+                            (Some(&a), Some(&b)) => (a, b),
+                            _ => EMPTY,
+                        };
+                        assert_eq!(
+                            hull, d.rows[y as usize],
+                            "chart {i} orientation {k} row {y}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(
+            concave > 0,
+            "no orientation with a row of D in several runs"
+        );
+    }
+
+    #[test]
     fn quarter_turn_extents_equal_a_direct_rasterization() {
         // An L-shaped chart: its 90° footprint derived by re-indexing equals rasterizing it
         // turned (up to where the layout centres it, which is the same by symmetry here).
