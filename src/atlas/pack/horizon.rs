@@ -108,9 +108,15 @@ impl HorizonPage {
 
     /// An empty page like [`Self::new`] that packs by hole filling instead of the horizons:
     /// each chart goes to the first fit in the page-sized box ([`super::hole`]).
-    pub fn with_holes(width_texels: u32, height_texels: u32) -> Self {
+    /// With `scored` false the search is the plain first fit ([`Occupancy::first_fit_only`]).
+    pub fn with_holes(width_texels: u32, height_texels: u32, scored: bool) -> Self {
         let mut page = Self::new(width_texels, height_texels);
-        page.occupancy = Some(Occupancy::new(2 * page.bound[0], 2 * page.bound[1]));
+        let occupancy = Occupancy::new(2 * page.bound[0], 2 * page.bound[1]);
+        page.occupancy = Some(if scored {
+            occupancy
+        } else {
+            occupancy.first_fit_only()
+        });
         page
     }
 

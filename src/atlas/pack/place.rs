@@ -376,6 +376,10 @@ pub struct Orientation {
     /// The texels of `F` themselves, same grid (for the occupancy of [`super::hole`]); `None`
     /// when not rasterized.
     pub footprint_bits: Option<FootprintBits>,
+    /// The texels of `D` themselves, same grid and window as `footprint_bits` (the exact
+    /// padded footprint that [`super::hole`] tests, row run by row run); `None` when not
+    /// rasterized.
+    pub dilated_bits: Option<FootprintBits>,
 }
 
 /// The texels of a footprint `F` on its orientation's grid: a rasterized mask, a window of it
@@ -469,6 +473,7 @@ impl Orientation {
             dilated: self.dilated.as_ref().map(Extents::rotate90),
             footprint: self.footprint.as_ref().map(Extents::rotate90),
             footprint_bits: self.footprint_bits.as_ref().map(FootprintBits::rotate90),
+            dilated_bits: self.dilated_bits.as_ref().map(FootprintBits::rotate90),
         }
     }
 }
@@ -577,6 +582,7 @@ fn orient(
         dilated: None,
         footprint: None,
         footprint_bits: None,
+        dilated_bits: None,
     };
     if dims[0] > i64::from(page_texels[0]) || dims[1] > i64::from(page_texels[1]) {
         return o;
@@ -638,7 +644,11 @@ fn orient(
         mask.set_span(padding_texels, padding_texels, padding_texels);
     }
     let f = Extents::of(&mask);
+    // The padded footprint's texels (for the contact-scored hole search); its extents from
+    // the footprint's, the same as the mask's (`Extents::dilated`).
+    let dmask = std::sync::Arc::new(mask.dilate(padding_texels));
     let d = f.dilated(padding_texels);
+    debug_assert_eq!(d, Extents::of(&dmask));
     let mask = std::sync::Arc::new(mask);
     // Sampled footprints need not reach the grid's margin: trim the grid to `D` (the grid is
     // the chart's box for the packer).
@@ -648,6 +658,12 @@ fn orient(
         Some((first, last))
     };
     let (Some((x0, x1)), Some((y0, y1))) = (span(&d.cols), span(&d.rows)) else {
+        o.dilated_bits = Some(FootprintBits {
+            size: [mask.width(), mask.height()],
+            mask: dmask,
+            origin: [0, 0],
+            turns: 0,
+        });
         o.footprint_bits = Some(FootprintBits {
             size: [mask.width(), mask.height()],
             mask,
@@ -686,6 +702,12 @@ fn orient(
     o.height_texels = (y1 - y0 + 1) as i64;
     o.footprint = Some(cut(&f));
     o.dilated = Some(cut(&d));
+    o.dilated_bits = Some(FootprintBits {
+        mask: dmask,
+        origin: [x0 as u32, y0 as u32],
+        size: [(x1 - x0 + 1) as u32, (y1 - y0 + 1) as u32],
+        turns: 0,
+    });
     o.footprint_bits = Some(FootprintBits {
         mask,
         origin: [x0 as u32, y0 as u32],
@@ -972,6 +994,75 @@ mod tests {
             }
         }
         assert!(turned > 20, "{turned}");
+    }
+
+    #[test]
+    fn dilated_bits_are_the_chebyshev_dilation_of_the_footprint_in_every_turn() {
+        // The texels of `D` that hole filling tests are exactly the grid texels within
+        // `padding` (Chebyshev) of a texel of `F`, and their per-row hull is `D`'s extents.
+        let set = crate::atlas::pack::test_charts::mixed_set(15, 7);
+        let mut concave = 0;
+        for (i, owned) in set.iter().enumerate() {
+            let chart = owned.as_pack_chart();
+            let prep = prepare_chart(i, &chart).unwrap();
+            for density in [4.0, 23.0] {
+                for (k, o) in orientations(&chart, &prep, density, 8, 2, [1024, 1024])
+                    .iter()
+                    .enumerate()
+                {
+                    let (Some(d), Some(f), Some(db)) =
+                        (&o.dilated, &o.footprint_bits, &o.dilated_bits)
+                    else {
+                        continue;
+                    };
+                    let (w, h) = (o.width_texels as i32, o.height_texels as i32);
+                    let mut fset = vec![false; (w * h) as usize];
+                    f.for_each_run(|r, a, b| {
+                        for c in a..=b {
+                            fset[(r * w as u32 + c) as usize] = true;
+                        }
+                    });
+                    let mut got = vec![false; (w * h) as usize];
+                    let mut runs_per_row = vec![0; h as usize];
+                    db.for_each_run(|r, a, b| {
+                        runs_per_row[r as usize] += 1;
+                        for c in a..=b {
+                            got[(r * w as u32 + c) as usize] = true;
+                        }
+                    });
+                    concave += usize::from(runs_per_row.iter().any(|&n| n > 1));
+                    for y in 0..h {
+                        for x in 0..w {
+                            let near = (y - 2..=y + 2).any(|v| {
+                                (x - 2..=x + 2).any(|u| {
+                                    (0..w).contains(&u)
+                                        && (0..h).contains(&v)
+                                        && fset[(v * w + u) as usize]
+                                })
+                            });
+                            assert_eq!(
+                                got[(y * w + x) as usize],
+                                near,
+                                "chart {i} orientation {k} texel ({x}, {y})"
+                            );
+                        }
+                        let row: Vec<i32> = (0..w).filter(|&x| got[(y * w + x) as usize]).collect();
+                        let hull = match (row.first(), row.last()) {
+                            (Some(&a), Some(&b)) => (a, b),
+                            _ => EMPTY,
+                        };
+                        assert_eq!(
+                            hull, d.rows[y as usize],
+                            "chart {i} orientation {k} row {y}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(
+            concave > 0,
+            "no orientation with a row of D in several runs"
+        );
     }
 
     #[test]
