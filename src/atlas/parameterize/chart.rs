@@ -303,9 +303,11 @@ impl ChartTopology {
             let Some(&pv) = positions_m.get(v) else {
                 continue;
             };
-            for k in lo..hi.min(self.neighbors.len()) {
-                if let Some(&pw) = positions_m.get(self.neighbors[k] as usize) {
-                    length_m[k] = norm3(sub(pw, pv));
+            let hi = hi.min(self.neighbors.len());
+            let lo = lo.min(hi);
+            for (len, &w) in length_m[lo..hi].iter_mut().zip(&self.neighbors[lo..hi]) {
+                if let Some(&pw) = positions_m.get(w as usize) {
+                    *len = norm3(sub(pw, pv));
                 }
             }
         }
@@ -344,12 +346,12 @@ impl ChartTopology {
                 self.neighbor_ptr[v as usize],
                 self.neighbor_ptr[v as usize + 1],
             );
-            for k in lo..hi.min(length_m.len()) {
-                let len = length_m[k];
+            let hi = hi.min(length_m.len()).min(self.neighbors.len());
+            let lo = lo.min(hi);
+            for (&len, &w) in length_m[lo..hi].iter().zip(&self.neighbors[lo..hi]) {
                 if len.is_nan() {
                     continue;
                 }
-                let w = self.neighbors[k];
                 let nd = d + len;
                 let Some(slot) = dist.get_mut(w as usize) else {
                     continue;
