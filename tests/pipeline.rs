@@ -146,7 +146,7 @@ fn a_plane_is_one_chart_with_no_stretch() {
         "a square chart should fill most of the page: {}",
         atlas.report.packing_efficiency
     );
-    // Fit-to-page searches the density: a bracket and a bisection.
+    // Fit-to-page searches the density: a bracket and a bisection, then the probes.
     assert!(atlas.stats.pack_trials > 3, "{:?}", atlas.stats);
     // At the density found, one packing.
     let mut options = AtlasOptions::default();

@@ -190,6 +190,20 @@ pub const MAX_FIT_TRIALS: usize = 16;
 /// ratio of the smallest known not to fit.
 pub const FIT_TOLERANCE: f64 = 3e-3;
 
+/// Densities tried above the bracket of [`TexelDensity::FitToPage`]: whether the charts fit is
+/// not monotone in the density (a slightly larger density can fit where a smaller did not),
+/// so after the bracket closes, `lo · (1 + k · FIT_PROBE_STEP)` for `k = 1..=FIT_PROBES` are
+/// packed too and the largest that fits wins (never less than the bracket's own result).
+/// Measured (1024², padding 2, 16 rotations): bunny 0.638 → 0.651, spot 0.583 → 0.619,
+/// armadillo 0.638 → 0.651 (4 probes: spot 0.631, one more packing). Not used when the charts
+/// are packed again with hole filling: there, on 2CylinderEngine, every probe failed with 4, 8
+/// and 16 angles for the small charts (one run each) while costing 3 of its 10 packings.
+/// Measured again after later packer changes (one run each): none of the 51 probes of the 17
+/// smaller corpus files fitted (3 of the 11 packings of bunny and armadillo, ~25 % of their
+/// pack stage), but on the 1M-triangle `beast_sub2_1M` they still raise the packing 0.636 →
+/// 0.649, so they stay.
+pub const FIT_PROBES: usize = 3;
+
 /// Charts whose placed UV area is below this many texels² try only the quarter turns of the
 /// diameter-vertical orientation (when `rotations` is a multiple of 4): a subset of the
 /// angles, a quarter of the search. Such charts are a few texels across, where finer angles
@@ -198,8 +212,8 @@ pub const FIT_TOLERANCE: f64 = 3e-3;
 /// charts are packed again with hole filling ([`hole`]): there a small chart goes into a gap
 /// between placed charts, where the angle matters. Measured on 2CylinderEngine (1024², padding
 /// 2, 2 threads, one run each, the hole-filling packing kept): quarter turns 0.5615 (pack stage
-/// 7.3 s), 8 angles 0.5728 (11.8 s), all 16 angles 0.5808 (24.2 s with the density
-/// probes, since removed, which all failed).
+/// 7.3 s), 8 angles 0.5728 (11.8 s), all 16 angles 0.5808 (24.2 s with the probes of
+/// [`FIT_PROBES`], which all failed).
 pub const SMALL_CHART_TEXELS: f64 = 1024.0;
 
 /// The rotations tried by the packing with hole filling ([`hole`]) for `rotations` asked:
@@ -229,6 +243,8 @@ pub fn hole_rotations(rotations: u32) -> u32 {
 /// with 24 angles (17 packings either way); 1 thread 41.9 s. The other corpus meshes give the
 /// same bytes as before.
 pub const HOLE_SCORED_MIN_CHARTS: usize = 33;
+/// Density step of the probes of [`FIT_PROBES`], as a ratio.
+pub const FIT_PROBE_STEP: f64 = 0.01;
 
 /// Places every chart on pages without overlap, keeping `padding_texels` between charts and from
 /// the page edge, all UVs in \[0,1\]. `monitor((done, total))` is called between charts; `Break`
@@ -244,7 +260,7 @@ pub const HOLE_SCORED_MIN_CHARTS: usize = 33;
 /// only), [`PackError::Cancelled`].
 ///
 /// Cost: one packing per density trial (one with a fixed density, at most
-/// [`MAX_FIT_TRIALS`] + 1 with fit-to-page, typically 7–8); a packing rasterizes
+/// [`MAX_FIT_TRIALS`] + [`FIT_PROBES`] + 1 with fit-to-page, typically 9–13); a packing rasterizes
 /// `⌈rotations / 4⌉` footprints per chart (or `rotations` when not a multiple of 4) and runs
 /// the horizon search of [`horizon`] for every orientation (the first-fit search of [`hole`]
 /// instead when the packing is repeated with hole filling: at most twice the packings).
@@ -710,25 +726,17 @@ fn unit(v: f64) -> f64 {
 
 /// The largest density (within [`FIT_TOLERANCE`]) at which one page holds every chart: a
 /// search on log density: steps from the last trial's fill ratio until a density that fits and
-/// one that does not are known, then bisection. A failing trial stops at its first chart that
-/// does not fit, so it costs at most a full one. Deterministic; at most [`MAX_FIT_TRIALS`]
-/// trials (+1 last-resort trial at a density where every chart is below a texel).
-///
-/// Whether the charts fit is not monotone in the density (a slightly larger density can fit
-/// where a smaller did not), so the search once also packed 3 "probes" above the closed
-/// bracket (`lo · 1.01`, `1.02`, `1.03`) and kept the largest that fit. They paid when they
-/// came in (bunny 0.638 → 0.651, spot 0.583 → 0.619, armadillo 0.638 → 0.651), but after the
-/// later packer changes none of the 51 probes on the 17 corpus files (all but 2CylinderEngine,
-/// packed by hole filling without probes, and the 1M-triangle scan) fitted, while they were 3
-/// of the 11 packings of bunny and armadillo; they were removed, with the same packing on
-/// every one of those files (1024², padding 2, one run).
+/// one that does not are known, then bisection; then the [`FIT_PROBES`] densities above the
+/// bracket. A failing trial stops at its first chart that does not fit, so it costs at most a
+/// full one. Deterministic; at most [`MAX_FIT_TRIALS`] + [`FIT_PROBES`] trials (+1 last-resort
+/// trial at a density where every chart is below a texel).
 fn fit_to_page(
     ctx: &Context<'_, '_>,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
 ) -> Result<Trial, PackError> {
     let [w, h] = ctx.page();
     let page_area = f64::from(w) * f64::from(h);
-    let mut progress = Progress::new(monitor, ctx.order.len() * (MAX_FIT_TRIALS + 1));
+    let mut progress = Progress::new(monitor, ctx.order.len() * (MAX_FIT_TRIALS + FIT_PROBES + 1));
     let total_area: f64 = ctx.order.iter().map(|&i| ctx.prepared[i].area_m2).sum();
     let does_not_fit = || PackError::DoesNotFit {
         charts: ctx.order.len(),
@@ -785,6 +793,18 @@ fn fit_to_page(
             _ => d / ratio,
         };
         d = clamp_d(next);
+    }
+    // Probes above the bracket (not when filling holes, [`FIT_PROBES`]); the largest density
+    // that fits wins.
+    let probes = if ctx.holes { 0 } else { FIT_PROBES };
+    if let Some(lo) = fit.as_ref().map(|f| f.texels_per_unit) {
+        for k in 1..=probes {
+            let d = clamp_d(lo * (1.0 + FIT_PROBE_STEP * k as f64));
+            let t = ctx.run(d, false, &mut progress)?;
+            if t.unplaced == 0 {
+                fit = Some(t);
+            }
+        }
     }
     let t = match fit {
         Some(t) => t,
