@@ -26,7 +26,7 @@
 //! candidates are both ends of every run of fitting positions on the rows whose grid ends at
 //! most [`CANDIDATE_ROWS`] after `E`, and the winner has the highest score `2 · contact −
 //! (y + height − E)`, where the contact counts the texels at distance 1 outside `D` that are
-//! occupied or outside the box (the ring of [`ring_runs`]: where the chart's padded outline
+//! occupied or outside the box (the ring of `ring_runs`: where the chart's padded outline
 //! touches placed charts or the page edge); ties by `(y + height, x, orientation)`. Best fit
 //! by contact, near the top: small charts go to the gaps they fill snugly and leave the wide
 //! ones to charts that need them. Deterministic, and exhaustive (every position of the
@@ -234,7 +234,7 @@ impl Occupancy {
     /// any orientation (never below `E`), lets each search stop early, and only the
     /// candidates within [`CANDIDATE_ROWS`] of `E` itself are kept, which every search has
     /// collected whatever the bound was when it stopped. The winner is the highest
-    /// [`Self::contact`] score, ties to the least `(y + height, x, orientation)`: the same
+    /// `Self::contact` score, ties to the least `(y + height, x, orientation)`: the same
     /// placement whatever the thread count and the order the searches run in.
     pub fn find(
         &self,

@@ -28,7 +28,10 @@
 //! it (see `place::orientation`), so that no two charts' triangles overlap exactly either. The
 //! whole chart stays inside its grid, which stays on the page (UVs in \[0,1\]).
 //! Every chart has the same density: placed UV area = `area_m2 × texels_per_unit²` texels².
-//! Deterministic: integer horizons, fixed orders, ties by index; no hash maps, no threads.
+//! Deterministic: integer horizons, fixed orders, ties by index, no hash maps; the parallel
+//! parts (footprints of a batch of charts, the sides of a horizon search, the orientations of a
+//! hole search) are reduced in a fixed order, so the result does not depend on the thread
+//! count.
 //!
 //! Units: chart UVs come in model units (as the parameterizer returns them); placed UVs are
 //! normalized page coordinates in \[0,1\]² (u right, v down, glTF convention); sizes on the page
