@@ -578,6 +578,28 @@ mod tests {
     use super::{d_rows, ring_runs, shift_and, Occupancy, Row, ScanBuffers, CANDIDATE_ROWS};
     use crate::atlas::pack::place::{orientations, prepare_chart};
     use crate::atlas::pack::test_charts::{mixed_set, xorshift64};
+
+    /// A `w × h` canvas of random runs on every row: the first starts before `start`, each is
+    /// up to `run` texels longer than one, and gaps are 1 + up to `gap` texels. Returns the
+    /// occupancy and the same texels as a plain row-major bitmap.
+    fn striped_canvas(
+        [w, h]: [i32; 2],
+        next: &mut impl FnMut(i32) -> i32,
+        [start, run, gap]: [i32; 3],
+    ) -> (Occupancy, Vec<bool>) {
+        let mut occ = Occupancy::new(w, h);
+        let mut taken = vec![false; (w * h) as usize];
+        for y in 0..h {
+            let mut x = next(start);
+            while x < w {
+                let e = (x + next(run)).min(w - 1);
+                occ.occupy(y, x, e);
+                (x..=e).for_each(|c| taken[(y * w + c) as usize] = true);
+                x = e + 2 + next(gap);
+            }
+        }
+        (occ, taken)
+    }
     use std::collections::BTreeSet;
 
     /// A row of `W` columns filled by random disjoint runs, checked after every run against a
@@ -628,18 +650,8 @@ mod tests {
         let mut next = |n: i32| (xorshift64(&mut seed) % n as u64) as i32;
         let (mut found, mut none) = (0, 0);
         for _canvas in 0..30 {
-            let mut occ = Occupancy::new(W, H);
-            let mut taken = vec![false; (W * H) as usize];
             let density = 1 + next(6);
-            for y in 0..H {
-                let mut x = next(20);
-                while x < W {
-                    let e = (x + next(3 * density)).min(W - 1);
-                    occ.occupy(y, x, e);
-                    (x..=e).for_each(|c| taken[(y * W + c) as usize] = true);
-                    x = e + 2 + next(90 / density);
-                }
-            }
+            let (occ, taken) = striped_canvas([W, H], &mut next, [20, 3 * density, 90 / density]);
             let free = |x: i32, y: i32| !taken[(y * W + x) as usize];
             for _chart in 0..20 {
                 let h = 1 + next(6);
@@ -741,17 +753,7 @@ mod tests {
         const H: i32 = 40;
         let mut seed = 0x0c0f_fee0_dead_beefu64;
         let mut next = |n: i32| (xorshift64(&mut seed) % n as u64) as i32;
-        let mut occ = Occupancy::new(W, H);
-        let mut taken = vec![false; (W * H) as usize];
-        for y in 0..H {
-            let mut x = next(10);
-            while x < W {
-                let e = (x + next(9)).min(W - 1);
-                occ.occupy(y, x, e);
-                (x..=e).for_each(|c| taken[(y * W + c) as usize] = true);
-                x = e + 2 + next(30);
-            }
-        }
+        let (occ, taken) = striped_canvas([W, H], &mut next, [10, 9, 30]);
         let bbox = [10, 5, 190, 35];
         let (mut partial, mut outside) = (0, 0);
         for _ in 0..300 {

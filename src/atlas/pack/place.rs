@@ -955,44 +955,50 @@ mod tests {
         assert!(checked > 10_000, "{checked}");
     }
 
-    #[test]
-    fn footprint_bits_agree_with_the_extents_in_every_turn() {
-        // The runs of every orientation (the quarter turns share a mask turned on demand) give
-        // back its per-row and per-column extents of F exactly, and stay on its grid.
-        let set = crate::atlas::pack::test_charts::mixed_set(20, 5);
-        let mut turned = 0;
+    /// `f(chart, orientation index, orientation)` for every orientation (8 rotations, padding
+    /// 2, a 1024² page) of every chart of `mixed_set(n, seed)`, at densities 4 and 23.
+    fn for_each_orientation(n: usize, seed: u64, mut f: impl FnMut(usize, usize, &Orientation)) {
+        let set = crate::atlas::pack::test_charts::mixed_set(n, seed);
         for (i, owned) in set.iter().enumerate() {
             let chart = owned.as_pack_chart();
             let prep = prepare_chart(i, &chart).unwrap();
             for density in [4.0, 23.0] {
-                for (k, o) in orientations(&chart, &prep, density, 8, 2, [1024, 1024])
-                    .iter()
-                    .enumerate()
-                {
-                    let (Some(f), Some(bits)) = (&o.footprint, &o.footprint_bits) else {
-                        continue;
-                    };
-                    turned += usize::from(k >= 2);
-                    let (w, h) = (o.width_texels as usize, o.height_texels as usize);
-                    let mut rows = vec![EMPTY; h];
-                    let mut cols = vec![EMPTY; w];
-                    bits.for_each_run(|r, a, b| {
-                        let (r, a, b) = (r as usize, a as i32, b as i32);
-                        assert!(
-                            r < h && a <= b && (b as usize) < w,
-                            "chart {i} run {r} {a} {b}"
-                        );
-                        rows[r] = (rows[r].0.min(a), rows[r].1.max(b));
-                        for c in a..=b {
-                            let e = &mut cols[c as usize];
-                            *e = (e.0.min(r as i32), e.1.max(r as i32));
-                        }
-                    });
-                    assert_eq!(rows, f.rows, "chart {i} orientation {k} rows");
-                    assert_eq!(cols, f.cols, "chart {i} orientation {k} columns");
+                let orients = orientations(&chart, &prep, density, 8, 2, [1024, 1024]);
+                for (k, o) in orients.iter().enumerate() {
+                    f(i, k, o);
                 }
             }
         }
+    }
+
+    #[test]
+    fn footprint_bits_agree_with_the_extents_in_every_turn() {
+        // The runs of every orientation (the quarter turns share a mask turned on demand) give
+        // back its per-row and per-column extents of F exactly, and stay on its grid.
+        let mut turned = 0;
+        for_each_orientation(20, 5, |i, k, o| {
+            let (Some(f), Some(bits)) = (&o.footprint, &o.footprint_bits) else {
+                return;
+            };
+            turned += usize::from(k >= 2);
+            let (w, h) = (o.width_texels as usize, o.height_texels as usize);
+            let mut rows = vec![EMPTY; h];
+            let mut cols = vec![EMPTY; w];
+            bits.for_each_run(|r, a, b| {
+                let (r, a, b) = (r as usize, a as i32, b as i32);
+                assert!(
+                    r < h && a <= b && (b as usize) < w,
+                    "chart {i} run {r} {a} {b}"
+                );
+                rows[r] = (rows[r].0.min(a), rows[r].1.max(b));
+                for c in a..=b {
+                    let e = &mut cols[c as usize];
+                    *e = (e.0.min(r as i32), e.1.max(r as i32));
+                }
+            });
+            assert_eq!(rows, f.rows, "chart {i} orientation {k} rows");
+            assert_eq!(cols, f.cols, "chart {i} orientation {k} columns");
+        });
         assert!(turned > 20, "{turned}");
     }
 
@@ -1000,65 +1006,52 @@ mod tests {
     fn dilated_bits_are_the_chebyshev_dilation_of_the_footprint_in_every_turn() {
         // The texels of `D` that hole filling tests are exactly the grid texels within
         // `padding` (Chebyshev) of a texel of `F`, and their per-row hull is `D`'s extents.
-        let set = crate::atlas::pack::test_charts::mixed_set(15, 7);
         let mut concave = 0;
-        for (i, owned) in set.iter().enumerate() {
-            let chart = owned.as_pack_chart();
-            let prep = prepare_chart(i, &chart).unwrap();
-            for density in [4.0, 23.0] {
-                for (k, o) in orientations(&chart, &prep, density, 8, 2, [1024, 1024])
-                    .iter()
-                    .enumerate()
-                {
-                    let (Some(d), Some(f), Some(db)) =
-                        (&o.dilated, &o.footprint_bits, &o.dilated_bits)
-                    else {
-                        continue;
-                    };
-                    let (w, h) = (o.width_texels as i32, o.height_texels as i32);
-                    let mut fset = vec![false; (w * h) as usize];
-                    f.for_each_run(|r, a, b| {
-                        for c in a..=b {
-                            fset[(r * w as u32 + c) as usize] = true;
-                        }
-                    });
-                    let mut got = vec![false; (w * h) as usize];
-                    let mut runs_per_row = vec![0; h as usize];
-                    db.for_each_run(|r, a, b| {
-                        runs_per_row[r as usize] += 1;
-                        for c in a..=b {
-                            got[(r * w as u32 + c) as usize] = true;
-                        }
-                    });
-                    concave += usize::from(runs_per_row.iter().any(|&n| n > 1));
-                    for y in 0..h {
-                        for x in 0..w {
-                            let near = (y - 2..=y + 2).any(|v| {
-                                (x - 2..=x + 2).any(|u| {
-                                    (0..w).contains(&u)
-                                        && (0..h).contains(&v)
-                                        && fset[(v * w + u) as usize]
-                                })
-                            });
-                            assert_eq!(
-                                got[(y * w + x) as usize],
-                                near,
-                                "chart {i} orientation {k} texel ({x}, {y})"
-                            );
-                        }
-                        let row: Vec<i32> = (0..w).filter(|&x| got[(y * w + x) as usize]).collect();
-                        let hull = match (row.first(), row.last()) {
-                            (Some(&a), Some(&b)) => (a, b),
-                            _ => EMPTY,
-                        };
-                        assert_eq!(
-                            hull, d.rows[y as usize],
-                            "chart {i} orientation {k} row {y}"
-                        );
-                    }
+        for_each_orientation(15, 7, |i, k, o| {
+            let (Some(d), Some(f), Some(db)) = (&o.dilated, &o.footprint_bits, &o.dilated_bits)
+            else {
+                return;
+            };
+            let (w, h) = (o.width_texels as i32, o.height_texels as i32);
+            let mut fset = vec![false; (w * h) as usize];
+            f.for_each_run(|r, a, b| {
+                for c in a..=b {
+                    fset[(r * w as u32 + c) as usize] = true;
                 }
+            });
+            let mut got = vec![false; (w * h) as usize];
+            let mut runs_per_row = vec![0; h as usize];
+            db.for_each_run(|r, a, b| {
+                runs_per_row[r as usize] += 1;
+                for c in a..=b {
+                    got[(r * w as u32 + c) as usize] = true;
+                }
+            });
+            concave += usize::from(runs_per_row.iter().any(|&n| n > 1));
+            for y in 0..h {
+                for x in 0..w {
+                    let near = (y - 2..=y + 2).any(|v| {
+                        (x - 2..=x + 2).any(|u| {
+                            (0..w).contains(&u) && (0..h).contains(&v) && fset[(v * w + u) as usize]
+                        })
+                    });
+                    assert_eq!(
+                        got[(y * w + x) as usize],
+                        near,
+                        "chart {i} orientation {k} texel ({x}, {y})"
+                    );
+                }
+                let row: Vec<i32> = (0..w).filter(|&x| got[(y * w + x) as usize]).collect();
+                let hull = match (row.first(), row.last()) {
+                    (Some(&a), Some(&b)) => (a, b),
+                    _ => EMPTY,
+                };
+                assert_eq!(
+                    hull, d.rows[y as usize],
+                    "chart {i} orientation {k} row {y}"
+                );
             }
-        }
+        });
         assert!(
             concave > 0,
             "no orientation with a row of D in several runs"
