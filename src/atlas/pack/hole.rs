@@ -816,7 +816,7 @@ mod tests {
             for (i, owned) in charts.iter().enumerate() {
                 let chart = owned.as_pack_chart();
                 let prep = prepare_chart(i, &chart).unwrap();
-                let orients = orientations(&chart, &prep, 9.0, 8, 2, [1024, 1024]);
+                let orients = orientations(&chart, &prep, 9.0, 8, 2, [1024, 1024], true);
                 let usable: Vec<bool> = orients.iter().map(|o| o.dilated.is_some()).collect();
                 // Brute force: (score, end, x, k) of every candidate.
                 let mut fits_of = Vec::new();

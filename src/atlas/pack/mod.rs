@@ -195,8 +195,9 @@ pub const FIT_TOLERANCE: f64 = 3e-3;
 
 /// Densities tried above the bracket of [`TexelDensity::FitToPage`]: whether the charts fit is
 /// not monotone in the density (a slightly larger density can fit where a smaller did not),
-/// so after the bracket closes, `lo · (1 + k · FIT_PROBE_STEP)` for `k = 1..=FIT_PROBES` are
-/// packed too and the largest that fits wins (never less than the bracket's own result).
+/// so after the bracket closes, `lo · (1 + k · FIT_PROBE_STEP)` for `k = 1, 2, …` up to
+/// `FIT_PROBES` are packed too, upwards until the first that does not fit; the last that fits
+/// wins (never less than the bracket's own result).
 /// Measured (1024², padding 2, 16 rotations): bunny 0.638 → 0.651, spot 0.583 → 0.619,
 /// armadillo 0.638 → 0.651 (4 probes: spot 0.631, one more packing). Not used when the charts
 /// are packed again with hole filling: there, on 2CylinderEngine, every probe failed with 4, 8
@@ -204,7 +205,10 @@ pub const FIT_TOLERANCE: f64 = 3e-3;
 /// Measured again after later packer changes (one run each): none of the 51 probes of the 17
 /// smaller corpus files fitted (3 of the 11 packings of bunny and armadillo, ~25 % of their
 /// pack stage), but on the 1M-triangle `beast_sub2_1M` they still raise the packing 0.636 →
-/// 0.649, so they stay.
+/// 0.649, so they stay. There the first probe fitted and the second and third did not, so
+/// probing stops at the first failure: the same packing on beast and on the 17 smaller files
+/// (their GLBs byte-identical), for one probe instead of three where the first fails (bunny and
+/// armadillo 11 → 9 packings, pack stage about −15 %, one run each).
 pub const FIT_PROBES: usize = 3;
 
 /// Charts whose placed UV area is below this many texels² try only the quarter turns of the
@@ -263,7 +267,7 @@ pub const FIT_PROBE_STEP: f64 = 0.01;
 /// only), [`PackError::Cancelled`].
 ///
 /// Cost: one packing per density trial (one with a fixed density, at most
-/// [`MAX_FIT_TRIALS`] + [`FIT_PROBES`] + 1 with fit-to-page, typically 9–13); a packing rasterizes
+/// [`MAX_FIT_TRIALS`] + [`FIT_PROBES`] + 1 with fit-to-page, typically 8–11); a packing rasterizes
 /// `⌈rotations / 4⌉` footprints per chart (or `rotations` when not a multiple of 4) and runs
 /// the horizon search of [`horizon`] for every orientation (the first-fit search of [`hole`]
 /// instead when the packing is repeated with hole filling: at most twice the packings).
@@ -595,6 +599,7 @@ impl Context<'_, '_> {
                             rotations,
                             o.padding_texels,
                             [w, h],
+                            holes,
                         )
                     })
                     .collect();
@@ -730,7 +735,7 @@ fn unit(v: f64) -> f64 {
 /// The largest density (within [`FIT_TOLERANCE`]) at which one page holds every chart: a
 /// search on log density: steps from the last trial's fill ratio until a density that fits and
 /// one that does not are known, then bisection; then the [`FIT_PROBES`] densities above the
-/// bracket. A failing trial stops at its first chart that does not fit, so it costs at most a
+/// bracket, upwards until one does not fit. A failing trial stops at its first chart that does not fit, so it costs at most a
 /// full one. Deterministic; at most [`MAX_FIT_TRIALS`] + [`FIT_PROBES`] trials (+1 last-resort
 /// trial at a density where every chart is below a texel).
 fn fit_to_page(
@@ -797,16 +802,17 @@ fn fit_to_page(
         };
         d = clamp_d(next);
     }
-    // Probes above the bracket (not when filling holes, [`FIT_PROBES`]); the largest density
-    // that fits wins.
+    // Probes above the bracket (not when filling holes, [`FIT_PROBES`]), upwards while they
+    // fit: the largest density that fits wins.
     let probes = if ctx.holes { 0 } else { FIT_PROBES };
     if let Some(lo) = fit.as_ref().map(|f| f.texels_per_unit) {
         for k in 1..=probes {
             let d = clamp_d(lo * (1.0 + FIT_PROBE_STEP * k as f64));
             let t = ctx.run(d, false, &mut progress)?;
-            if t.unplaced == 0 {
-                fit = Some(t);
+            if t.unplaced > 0 {
+                break;
             }
+            fit = Some(t);
         }
     }
     let t = match fit {

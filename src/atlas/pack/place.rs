@@ -479,7 +479,10 @@ impl Orientation {
 }
 
 /// The `rotations` orientations of a chart at `texels_per_unit`, for a page of `page_texels`
-/// with `padding_texels`. Angle `k` is `base_angle_rad + 2πk / rotations`.
+/// with `padding_texels`. Angle `k` is `base_angle_rad + 2πk / rotations`. With
+/// `padded_bits`, each rasterized orientation also keeps the texels of `D`
+/// ([`Orientation::dilated_bits`], one more dilation of the mask); only the hole search of
+/// [`super::hole`] reads them, so horizon packings pass `false` and get `None` there.
 pub fn orientations(
     chart: &PackChart<'_>,
     prep: &PreparedChart,
@@ -487,6 +490,7 @@ pub fn orientations(
     rotations: u32,
     padding_texels: u32,
     page_texels: [u32; 2],
+    padded_bits: bool,
 ) -> Vec<Orientation> {
     let rotations = rotations.max(1) as usize;
     let quarter = rotations % 4 == 0 && prep.unit_scale > 0.0;
@@ -502,6 +506,7 @@ pub fn orientations(
                 texels_per_unit,
                 padding_texels,
                 page_texels,
+                padded_bits,
             )
         })
         .collect();
@@ -521,6 +526,7 @@ pub fn orientations(
                     texels_per_unit,
                     padding_texels,
                     page_texels,
+                    padded_bits,
                 )
             };
             out.push(o);
@@ -536,6 +542,7 @@ fn orient(
     texels_per_unit: f64,
     padding_texels: u32,
     page_texels: [u32; 2],
+    padded_bits: bool,
 ) -> Orientation {
     let sigma = prep.unit_scale * texels_per_unit;
     let sigma = if sigma.is_finite() { sigma } else { 0.0 };
@@ -646,9 +653,9 @@ fn orient(
     let f = Extents::of(&mask);
     // The padded footprint's texels (for the contact-scored hole search); its extents from
     // the footprint's, the same as the mask's (`Extents::dilated`).
-    let dmask = std::sync::Arc::new(mask.dilate(padding_texels));
+    let dmask = padded_bits.then(|| std::sync::Arc::new(mask.dilate(padding_texels)));
     let d = f.dilated(padding_texels);
-    debug_assert_eq!(d, Extents::of(&dmask));
+    debug_assert!(dmask.as_ref().is_none_or(|m| d == Extents::of(m)));
     let mask = std::sync::Arc::new(mask);
     // Sampled footprints need not reach the grid's margin: trim the grid to `D` (the grid is
     // the chart's box for the packer).
@@ -658,7 +665,7 @@ fn orient(
         Some((first, last))
     };
     let (Some((x0, x1)), Some((y0, y1))) = (span(&d.cols), span(&d.rows)) else {
-        o.dilated_bits = Some(FootprintBits {
+        o.dilated_bits = dmask.map(|dmask| FootprintBits {
             size: [mask.width(), mask.height()],
             mask: dmask,
             origin: [0, 0],
@@ -702,7 +709,7 @@ fn orient(
     o.height_texels = (y1 - y0 + 1) as i64;
     o.footprint = Some(cut(&f));
     o.dilated = Some(cut(&d));
-    o.dilated_bits = Some(FootprintBits {
+    o.dilated_bits = dmask.map(|dmask| FootprintBits {
         mask: dmask,
         origin: [x0 as u32, y0 as u32],
         size: [(x1 - x0 + 1) as u32, (y1 - y0 + 1) as u32],
@@ -869,8 +876,8 @@ mod tests {
                     ..prep.clone()
                 };
                 for density in [3.0, 17.5, 90.0] {
-                    let a = orientations(&chart, &prep, density, 8, 2, [1024, 1024]);
-                    let b = orientations(&chart, &all, density, 8, 2, [1024, 1024]);
+                    let a = orientations(&chart, &prep, density, 8, 2, [1024, 1024], true);
+                    let b = orientations(&chart, &all, density, 8, 2, [1024, 1024], true);
                     for (x, y) in a.iter().zip(&b) {
                         assert_eq!(x.affine, y.affine, "chart {i}");
                         assert_eq!(x.footprint, y.footprint, "chart {i}");
@@ -894,7 +901,7 @@ mod tests {
                 let chart = owned.as_pack_chart();
                 let prep = prepare_chart(i, &chart).unwrap();
                 for density in [3.0, 17.5, 90.0] {
-                    for o in orientations(&chart, &prep, density, 3, 2, [1024, 1024]) {
+                    for o in orientations(&chart, &prep, density, 3, 2, [1024, 1024], true) {
                         if o.dilated.is_none() {
                             continue;
                         }
@@ -963,7 +970,7 @@ mod tests {
             let chart = owned.as_pack_chart();
             let prep = prepare_chart(i, &chart).unwrap();
             for density in [4.0, 23.0] {
-                let orients = orientations(&chart, &prep, density, 8, 2, [1024, 1024]);
+                let orients = orientations(&chart, &prep, density, 8, 2, [1024, 1024], true);
                 for (k, o) in orients.iter().enumerate() {
                     f(i, k, o);
                 }
@@ -1077,7 +1084,7 @@ mod tests {
             area_m2: 4.0,
         };
         let prep = prepare_chart(0, &chart).unwrap();
-        let four = orientations(&chart, &prep, 7.3, 4, 2, [1024, 1024]);
+        let four = orientations(&chart, &prep, 7.3, 4, 2, [1024, 1024], true);
         let turned = orient(
             &chart,
             &prep,
@@ -1085,6 +1092,7 @@ mod tests {
             7.3,
             2,
             [1024, 1024],
+            true,
         );
         assert_eq!(four[1].width_texels, turned.width_texels);
         assert_eq!(four[1].height_texels, turned.height_texels);
