@@ -277,11 +277,18 @@ pub fn pack_charts(
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
 ) -> Result<Packing, PackError> {
     options.check()?;
-    let prepared = charts
-        .iter()
-        .enumerate()
-        .map(|(i, c)| place::prepare_chart(i, c))
-        .collect::<Result<Vec<_>, _>>()?;
+    // Each chart's density-independent data on its own (in parallel), then the first error in
+    // chart order, whatever the thread count.
+    let prepared = {
+        use rayon::prelude::*;
+        charts
+            .par_iter()
+            .enumerate()
+            .map(|(i, c)| place::prepare_chart(i, c))
+            .collect::<Vec<_>>()
+            .into_iter()
+            .collect::<Result<Vec<_>, _>>()?
+    };
     // Largest first (lscm-2002 §4 step 2, isocharts-2004 §6 step 2); ties by index.
     let mut order: Vec<usize> = (0..charts.len())
         .filter(|&i| prepared[i].has_vertices)
