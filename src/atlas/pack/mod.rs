@@ -30,8 +30,9 @@
 //! Every chart has the same density: placed UV area = `area_m2 × texels_per_unit²` texels².
 //! Deterministic: integer horizons, fixed orders, ties by index, no hash maps; the parallel
 //! parts (footprints of a batch of charts, the sides of a horizon search, the orientations of a
-//! hole search) are reduced in a fixed order, so the result does not depend on the thread
-//! count.
+//! hole search) are reduced in a fixed order, and a trial of the density search packed ahead
+//! is used only when the search asks for exactly its density, so the result does not depend on
+//! the thread count.
 //!
 //! Units: chart UVs come in model units (as the parameterizer returns them); placed UVs are
 //! normalized page coordinates in \[0,1\]² (u right, v down, glTF convention); sizes on the page
@@ -304,7 +305,7 @@ pub fn pack_charts(
         prepared: &prepared,
         order: &order,
         options,
-        trials: std::cell::Cell::new(0),
+        trials: std::sync::atomic::AtomicU32::new(0),
         holes: false,
         scored: false,
     };
@@ -506,7 +507,7 @@ struct Context<'c, 'a> {
     order: &'c [usize],
     options: &'c PackOptions,
     /// Packings run so far.
-    trials: std::cell::Cell<u32>,
+    trials: std::sync::atomic::AtomicU32,
     /// Whether pages fill holes ([`horizon::HorizonPage::with_holes`]).
     holes: bool,
     /// With `holes`: whether the hole search scores candidates by contact and tries
@@ -560,9 +561,26 @@ impl Context<'_, '_> {
         multi_page: bool,
         progress: &mut Progress<'_>,
     ) -> Result<Trial, PackError> {
+        self.count_trial();
+        self.run_uncounted(texels_per_unit, multi_page, progress)
+    }
+
+    /// Counts one packing in [`Packing::trials`].
+    fn count_trial(&self) {
+        self.trials
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// [`Self::run`] without counting the trial (a trial packed ahead is counted only when
+    /// the search uses it).
+    fn run_uncounted(
+        &self,
+        texels_per_unit: f64,
+        multi_page: bool,
+        progress: &mut Progress<'_>,
+    ) -> Result<Trial, PackError> {
         let o = self.options;
         let [w, h] = self.page();
-        self.trials.set(self.trials.get() + 1);
         let mut trial = Trial {
             texels_per_unit,
             placed: vec![None; self.charts.len()],
@@ -725,7 +743,7 @@ impl Context<'_, '_> {
             charts,
             num_pages: trial.pages.len() as u32,
             texels_per_unit: trial.texels_per_unit,
-            trials: self.trials.get(),
+            trials: self.trials.load(std::sync::atomic::Ordering::Relaxed),
         }
     }
 }
@@ -742,9 +760,16 @@ fn unit(v: f64) -> f64 {
 /// The largest density (within [`FIT_TOLERANCE`]) at which one page holds every chart: a
 /// search on log density: steps from the last trial's fill ratio until a density that fits and
 /// one that does not are known, then bisection; then the [`FIT_PROBES`] densities above the
-/// bracket, upwards until one does not fit. A failing trial stops at its first chart that does not fit, so it costs at most a
-/// full one. Deterministic; at most [`MAX_FIT_TRIALS`] + [`FIT_PROBES`] trials (+1 last-resort
-/// trial at a density where every chart is below a texel).
+/// bracket, upwards until one does not fit ([`FitSearch`]). A failing trial stops at its first
+/// chart that does not fit, so it costs at most a full one. Deterministic; at most
+/// [`MAX_FIT_TRIALS`] + [`FIT_PROBES`] trials (+1 last-resort trial at a density where every
+/// chart is below a texel).
+///
+/// With more than one thread, the trial that would come next if this one had the predicted
+/// outcome is packed at the same time; measured (2 threads, 5 runs each, pack stage medians,
+/// machine loaded): bunny 0.172 → 0.137 s, armadillo 0.232 → 0.214 s, spot 0.112 → 0.096 s,
+/// fandisk unchanged, 2CylinderEngine 21.4 → 19.3 s (one run), the same GLBs and trial
+/// counts.
 fn fit_to_page(
     ctx: &Context<'_, '_>,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
@@ -769,14 +794,9 @@ fn fit_to_page(
         };
     }
     let clamp_d = |d: f64| d.clamp(1e-300, 1e300);
-    // Start where charts would cover 60% of the page.
-    let mut d = clamp_d((0.6 * page_area / total_area).sqrt());
-    let mut fit: Option<Trial> = None;
-    let mut no_fit: Option<f64> = None;
-    for _ in 0..MAX_FIT_TRIALS {
-        let t = ctx.run(d, false, &mut progress)?;
-        // How much the packing would have to shrink (> 1) or could grow (< 1).
-        let ratio = if t.unplaced == 0 {
+    // How much the packing would have to shrink (> 1) or could grow (< 1).
+    let ratio_of = |t: &Trial| {
+        if t.unplaced == 0 {
             let [x0, y0, x1, y1] = t.pages[0].bbox().unwrap_or([0, 0, 1, 1]);
             (f64::from(x1 - x0) / f64::from(w)).max(f64::from(y1 - y0) / f64::from(h))
         } else {
@@ -785,42 +805,71 @@ fn fit_to_page(
                 .sqrt()
                 .max(t.worst_size_ratio)
                 .max(1.0 + FIT_TOLERANCE)
+        }
+    };
+    // Start where charts would cover 60% of the page.
+    let mut d = clamp_d((0.6 * page_area / total_area).sqrt());
+    let mut search = FitSearch {
+        probes: if ctx.holes { 0 } else { FIT_PROBES },
+        ..FitSearch::default()
+    };
+    let mut fit: Option<Trial> = None;
+    // With more than one thread, the trial the search would run next if this one had the
+    // predicted outcome ([`FitSearch::predicted`]) is packed at the same time, by the pool;
+    // it is used only when the search asks for exactly that density next (bit for bit), so
+    // the trials, their count and the result are those of the sequential search.
+    let speculate = rayon::current_num_threads() > 1;
+    let mut ready: Option<Trial> = None;
+    loop {
+        let (t, spec) = match ready.take() {
+            Some(t) => {
+                // Packed ahead: its progress steps now (and the monitor may cancel).
+                for _ in 0..ctx.order.len() {
+                    progress.step()?;
+                }
+                (t, None)
+            }
+            None => {
+                let ahead = if speculate {
+                    let (fitted, ratio) = search.predicted();
+                    search.clone().next(d, fitted, ratio).map(clamp_d)
+                } else {
+                    None
+                };
+                match ahead {
+                    Some(d2) => {
+                        let mut spec = None;
+                        let t = rayon::in_place_scope(|scope| {
+                            let spec = &mut spec;
+                            scope.spawn(move |_| {
+                                let mut quiet = |_: (usize, usize)| ControlFlow::Continue(());
+                                *spec = Some(ctx.run_uncounted(
+                                    d2,
+                                    false,
+                                    &mut Progress::new(&mut quiet, 1),
+                                ));
+                            });
+                            ctx.run(d, false, &mut progress)
+                        })?;
+                        (t, spec.map(|r| (d2, r)))
+                    }
+                    None => (ctx.run(d, false, &mut progress)?, None),
+                }
+            }
         };
         let fitted = t.unplaced == 0;
-        if fitted {
-            if fit.as_ref().is_none_or(|f| d > f.texels_per_unit) {
-                fit = Some(t);
-            }
-        } else if no_fit.is_none_or(|n| d < n) {
-            no_fit = Some(d);
-        }
-        let lo = fit.as_ref().map(|f| f.texels_per_unit);
-        if let (Some(lo), Some(hi)) = (lo, no_fit) {
-            if hi <= lo * (1.0 + FIT_TOLERANCE) {
-                break;
-            }
-        }
-        // Once bracketed, bisect (log scale); before, step by the fill ratio (a packing's size
-        // is about linear in density), growing by at least 5% while it fits.
-        let next = match (lo, no_fit) {
-            (Some(l), Some(n)) => (l * n).sqrt(),
-            _ if fitted => d / ratio.min(1.0 / 1.05),
-            _ => d / ratio,
-        };
-        d = clamp_d(next);
-    }
-    // Probes above the bracket (not when filling holes, [`FIT_PROBES`]), upwards while they
-    // fit: the largest density that fits wins.
-    let probes = if ctx.holes { 0 } else { FIT_PROBES };
-    if let Some(lo) = fit.as_ref().map(|f| f.texels_per_unit) {
-        for k in 1..=probes {
-            let d = clamp_d(lo * (1.0 + FIT_PROBE_STEP * k as f64));
-            let t = ctx.run(d, false, &mut progress)?;
-            if t.unplaced > 0 {
-                break;
-            }
+        let next = search.next(d, fitted, ratio_of(&t)).map(clamp_d);
+        if fitted && fit.as_ref().is_none_or(|f| d > f.texels_per_unit) {
             fit = Some(t);
         }
+        let Some(n) = next else { break };
+        if let Some((d2, r)) = spec {
+            if d2.to_bits() == n.to_bits() {
+                ctx.count_trial();
+                ready = Some(r?);
+            }
+        }
+        d = n;
     }
     let t = match fit {
         Some(t) => t,
@@ -845,6 +894,76 @@ fn fit_to_page(
     };
     progress.finish()?;
     Ok(t)
+}
+
+/// The density search of [`fit_to_page`] as a state machine: which density to pack next,
+/// given the last one and its outcome (so that the next trial can be predicted and packed
+/// ahead, [`FitSearch::predicted`]).
+#[derive(Debug, Clone, Default)]
+struct FitSearch {
+    /// Largest density known to fit, smallest known not to fit (search phase).
+    lo: Option<f64>,
+    hi: Option<f64>,
+    /// Search trials run so far.
+    steps: usize,
+    /// Probes to run after the search ([`FIT_PROBES`], 0 when filling holes), and the probe
+    /// running (`k ≥ 1`: density `base · (1 + k · FIT_PROBE_STEP)`), with its base `lo`.
+    probes: usize,
+    probe: usize,
+    probe_base: f64,
+}
+
+impl FitSearch {
+    /// Records that density `d` fitted or not (`ratio`: how much the packing would have to
+    /// shrink, > 1, or could grow, < 1) and returns the density to pack next, or `None` when
+    /// the search is over.
+    fn next(&mut self, d: f64, fitted: bool, ratio: f64) -> Option<f64> {
+        if self.probe > 0 {
+            // Probes go upwards while they fit.
+            if !fitted || self.probe >= self.probes {
+                return None;
+            }
+            self.probe += 1;
+            return Some(self.probe_base * (1.0 + FIT_PROBE_STEP * self.probe as f64));
+        }
+        self.steps += 1;
+        if fitted {
+            if self.lo.is_none_or(|l| d > l) {
+                self.lo = Some(d);
+            }
+        } else if self.hi.is_none_or(|n| d < n) {
+            self.hi = Some(d);
+        }
+        let closed =
+            matches!((self.lo, self.hi), (Some(l), Some(n)) if n <= l * (1.0 + FIT_TOLERANCE));
+        if closed || self.steps >= MAX_FIT_TRIALS {
+            let lo = self.lo?;
+            if self.probes == 0 {
+                return None;
+            }
+            self.probe = 1;
+            self.probe_base = lo;
+            return Some(lo * (1.0 + FIT_PROBE_STEP));
+        }
+        // Once bracketed, bisect (log scale); before, step by the fill ratio (a packing's size
+        // is about linear in density), growing by at least 5% while it fits.
+        Some(match (self.lo, self.hi) {
+            (Some(l), Some(n)) => (l * n).sqrt(),
+            _ if fitted => d / ratio.min(1.0 / 1.05),
+            _ => d / ratio,
+        })
+    }
+
+    /// The outcome to bet on for packing ahead: before a bracket, that the trial fits and
+    /// fills the page (the search then grows by 5 %); once bracketed, or while probing, that
+    /// it does not fit (the usual case on the corpus: most bisection steps and probes fail).
+    fn predicted(&self) -> (bool, f64) {
+        if self.probe == 0 && self.hi.is_none() {
+            (true, 1.0)
+        } else {
+            (false, 1.0 + FIT_TOLERANCE)
+        }
+    }
 }
 
 /// Largest side of the UV bounding box of a chart's referenced vertices, model units.

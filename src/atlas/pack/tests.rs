@@ -445,6 +445,27 @@ fn slivers_that_cover_no_texel_centre_are_never_overlapped() {
 }
 
 #[test]
+fn the_density_search_packed_ahead_matches_the_sequential_one() {
+    // With one thread no trial is packed ahead; with two, the predicted next trial is packed
+    // at the same time and used only when the search asks for it: the same packing, density
+    // and trial count either way (several chart sets, so that predictions both hit and miss).
+    for (n, seed) in [(40, 5), (25, 11), (60, 3)] {
+        let charts = mixed_set(n, seed);
+        let options = PackOptions::default();
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| pack(&charts, &options).0)
+        };
+        let one = on(1);
+        assert_eq!(one, on(2), "{n} charts, seed {seed}");
+        assert!(one.trials > 1);
+    }
+}
+
+#[test]
 fn fit_to_page_probes_keep_the_largest_density_that_fits() {
     // The density chosen (possibly by a probe above the bracket) packs on one page at that
     // fixed density too, with every guarantee; the search ran the bracket and the probes.
