@@ -204,9 +204,17 @@ impl HorizonPage {
                 .collect();
             let probe = groups
                 .iter()
-                .filter_map(|g| g.probe(&wall))
+                .filter_map(|g| g.probe(&wall, &prefix))
                 .fold(i64::MAX, i64::min);
-            (SideSearch { side, wall, groups }, probe)
+            (
+                SideSearch {
+                    side,
+                    wall,
+                    prefix,
+                    groups,
+                },
+                probe,
+            )
         };
         let prepared: Vec<(SideSearch, i64)> = if parallel {
             use rayon::prelude::*;
@@ -227,7 +235,7 @@ impl HorizonPage {
                 if best.bound == 0 {
                     break;
                 }
-                g.scan(s.side, &s.wall, &mut best);
+                g.scan(s.side, &s.wall, &s.prefix, &mut best);
             }
             best
         };
@@ -397,7 +405,12 @@ impl HorizonPage {
                 }
             })
             .collect();
-        let Scratch { order, empty_lines } = scratch;
+        let Scratch {
+            order,
+            empty_lines,
+            t_key,
+            base,
+        } = scratch;
         order.clear();
         order.extend((0..prof.len()).filter(|&c| prof[c] != NO_LINE));
         // Only the 4 most protruding lines need an order (the key lines below); a partial
@@ -443,7 +456,8 @@ impl HorizonPage {
         }
         let npos = (hi - lo + 1) as usize;
         let (lo_u, len_u) = (lo as usize, len as usize);
-        let mut t_key = vec![i32::MIN; npos];
+        t_key.clear();
+        t_key.resize(npos, i32::MIN);
         for &c in &key {
             let start = lo_u + c;
             let pc = prof[c];
@@ -453,11 +467,13 @@ impl HorizonPage {
         }
         // base[i] = Σ prof - Σ wall over the chart's lines at position lo + i, so that the
         // waste at t is n·t + base (exact integers: the order of the sums does not matter).
-        let mut base: Vec<i64> = prefix[lo_u + len_u..lo_u + len_u + npos]
-            .iter()
-            .zip(&prefix[lo_u..lo_u + npos])
-            .map(|(&a, &z)| sum_prof - (a - z))
-            .collect();
+        base.clear();
+        base.extend(
+            prefix[lo_u + len_u..lo_u + len_u + npos]
+                .iter()
+                .zip(&prefix[lo_u..lo_u + npos])
+                .map(|(&a, &z)| sum_prof - (a - z)),
+        );
         for &c in empty_lines.iter() {
             let start = lo_u + c;
             for (b, &wv) in base.iter_mut().zip(&wall[start..start + npos]) {
@@ -469,7 +485,7 @@ impl HorizonPage {
         // rejected by the key lines exactly when lb[i] >= the best waste so far.
         let lb: Vec<i64> = t_key
             .iter()
-            .zip(&base)
+            .zip(base.iter())
             .map(|(&t0, &b)| {
                 let t0 = i64::from(t0);
                 if t0 > t_max {
@@ -482,8 +498,9 @@ impl HorizonPage {
         Some(Group {
             k,
             prof,
-            t_key,
-            base,
+            key,
+            empty: empty_lines.clone(),
+            sum_prof,
             lb,
             n,
             lo,
@@ -510,10 +527,11 @@ struct Best {
     found: Option<(i64, Placement)>,
 }
 
-/// One side's wall and its prepared orientations.
+/// One side's wall (and its prefix sums) and its prepared orientations.
 struct SideSearch {
     side: Side,
     wall: Vec<i32>,
+    prefix: Vec<i64>,
     groups: Vec<Group>,
 }
 
@@ -523,10 +541,14 @@ struct Group {
     k: usize,
     /// The chart's near edge per line in the side's `t` coordinate ([`NO_LINE`] if empty).
     prof: Vec<i32>,
-    /// Per position, the `t` the key lines force.
-    t_key: Vec<i32>,
-    /// Per position, `Σ prof - Σ wall` over the chart's lines, texels².
-    base: Vec<i64>,
+    /// The key lines ([`HorizonPage::prepare`]): at position `i`, they force
+    /// `t >= max over key lines c of wall[lo + i + c] - prof[c]`.
+    key: Vec<usize>,
+    /// The lines without footprint.
+    empty: Vec<usize>,
+    /// `Σ prof` over the non-empty lines: with the wall's prefix sums, the waste at position
+    /// `i` is `n·t + base(i)`, `base(i) = Σ prof - Σ wall` over those lines.
+    sum_prof: i64,
     /// Per position, the lower bound of the waste from the key lines, texels² (`i64::MAX`
     /// when that `t` is past `t_max`).
     lb: Vec<i64>,
@@ -542,13 +564,25 @@ struct Group {
 impl Group {
     /// The exact `t` and waste of position index `i` when its waste is below `bound` and it
     /// keeps the box within the bound; `None` otherwise.
-    fn eval(&self, wall: &[i32], i: usize, bound: i64) -> Option<(i64, i64)> {
+    fn eval(&self, wall: &[i32], prefix: &[i64], i: usize, bound: i64) -> Option<(i64, i64)> {
         const CHUNK: usize = 32;
-        let (n, base_i, t_max) = (self.n, self.base[i], self.t_max);
-        let reject = |t: i64| t > t_max || n * t + base_i >= bound;
-        let mut t = self.t_key[i];
         let p = (self.lo + i as i32) as usize;
-        let window = &wall[p..p + self.prof.len()];
+        let len = self.prof.len();
+        // `base(i)` and the key lines' `t`, as `prepare` computed them for its bound.
+        let base_i = self.sum_prof - (prefix[p + len] - prefix[p])
+            + self
+                .empty
+                .iter()
+                .map(|&c| i64::from(wall[p + c]))
+                .sum::<i64>();
+        let (n, t_max) = (self.n, self.t_max);
+        let reject = |t: i64| t > t_max || n * t + base_i >= bound;
+        let mut t = self
+            .key
+            .iter()
+            .map(|&c| wall[p + c] - self.prof[c])
+            .fold(i32::MIN, i32::max);
+        let window = &wall[p..p + len];
         for (wc, pc) in window.chunks(CHUNK).zip(self.prof.chunks(CHUNK)) {
             // Branch-free over a chunk (vectorizes), then one test.
             let m = wc
@@ -572,16 +606,16 @@ impl Group {
 
     /// The exact waste at the first position of least lower bound (an upper bound of the
     /// least waste of the page, when some position is feasible).
-    fn probe(&self, wall: &[i32]) -> Option<i64> {
+    fn probe(&self, wall: &[i32], prefix: &[i64]) -> Option<i64> {
         let (i, &lb) = self.lb.iter().enumerate().min_by_key(|&(i, &v)| (v, i))?;
         if lb == i64::MAX {
             return None;
         }
-        self.eval(wall, i, i64::MAX).map(|(_, waste)| waste)
+        self.eval(wall, prefix, i, i64::MAX).map(|(_, waste)| waste)
     }
 
     /// Updates `best` with every position, in order, whose waste is below the bound so far.
-    fn scan(&self, side: Side, wall: &[i32], best: &mut Best) {
+    fn scan(&self, side: Side, wall: &[i32], prefix: &[i64], best: &mut Best) {
         // Positions in blocks: a block whose least lower bound cannot beat the best so far is
         // skipped whole (the best does not change inside a skipped block, so this rejects exactly
         // the positions the test per position would).
@@ -602,7 +636,7 @@ impl Group {
                     continue;
                 }
                 let i = bi * BLOCK + j;
-                let Some((t, waste)) = self.eval(wall, i, best.bound) else {
+                let Some((t, waste)) = self.eval(wall, prefix, i, best.bound) else {
                     continue;
                 };
                 let pos = self.lo + i as i32;
@@ -633,6 +667,10 @@ struct Scratch {
     order: Vec<usize>,
     /// The chart's empty lines.
     empty_lines: Vec<usize>,
+    /// Per position, the `t` the key lines force.
+    t_key: Vec<i32>,
+    /// Per position, `Σ prof - Σ wall` over the chart's lines, texels².
+    base: Vec<i64>,
 }
 
 fn prefix_sums(v: &[i32]) -> Vec<i64> {
