@@ -475,18 +475,21 @@ impl VertexSet {
 impl<'a> Grower<'a> {
     fn new(mesh: &'a TriangleMesh, sharp: &'a [f64], tau: f64, max_len: usize) -> Self {
         let nv = mesh.num_vertices();
-        let ring: Vec<Out> = (0..nv as u32)
-            .into_par_iter()
-            .flat_map_iter(|v| {
+        // One pass into one allocation of the final size (a parallel flat-map collect built
+        // and copied per-thread pieces of this 40-byte-per-half-edge table, which cost more
+        // in page faults and copies than the pass itself).
+        let mut ring: Vec<Out> = Vec::with_capacity(mesh.num_halfedges());
+        for v in 0..nv as u32 {
+            ring.extend(
                 mesh.outgoing_halfedges(crate::mesh::VertexId(v))
                     .map(|g| Out {
                         sharp: sharp[g.index()],
                         to_m: mesh.position(mesh.to_vertex(g)),
                         g: g.0,
                         w: mesh.to_vertex(g).0,
-                    })
-            })
-            .collect();
+                    }),
+            );
+        }
         // Each half-edge leaves exactly one vertex, so `ring` is grouped by vertex in id order.
         let mut ring_start = vec![0u32; nv + 1];
         for o in &ring {
