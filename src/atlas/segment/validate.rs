@@ -1425,9 +1425,9 @@ fn similarity_misfit(pa: &[[f64; 2]], pb: &[[f64; 2]]) -> f64 {
 /// `merge_back` does not flatten a union whose two maps draw their shared boundary this
 /// differently ([`shared_arc_misfit`] above it): such a union fails anyway. Measured (one run,
 /// release) on bunny, armadillo, fandisk and spot before this test: of the 314 unions
-/// flattened, every one with a misfit above 0.7 failed (41 on armadillo, stretch up to 4,400 or
-/// a fold), the lowest misfit of a failure on armadillo being 0.05 and the highest of a success
-/// 0.50; skipping them saves 7 % (bunny), 13 % (armadillo) and 9 % (spot) of the faces flattened
+/// flattened, every one with a misfit above 0.7 failed (45: 37 on armadillo, 6 on spot, 2 on
+/// bunny; stretch up to 4,400, or a fold), while failures start at a misfit of 0.03 and the
+/// highest of a success was 0.50; skipping them saves 7 % (bunny), 13 % (armadillo) and 9 % (spot) of the faces flattened
 /// by the merge tries. It is a prediction, not a proof: a union above it that would pass is
 /// not merged (one more chart, never an invalid map). On the corpus that happened only on
 /// 2CylinderEngine (2613 → 2615 charts, evaluator packing 0.601832 either way, L2 1.02699 →
