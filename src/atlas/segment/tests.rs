@@ -368,12 +368,13 @@ fn disk_check_on_grid_subsets() {
     ));
 }
 
-/// The merge-back's disk test from two charts' intersection (`validate::union_is_disk`) gives
+/// The merge-back's disk test from two charts' intersection (`validate::union_arc`) gives
 /// the answer of [`check_chart_is_disk`] on the union, for every pair of charts of partitions
 /// into small disks (blocks of consecutive faces cut into disks by the disk guarantee) of
 /// closed, open and flat meshes; unions that are disks, annuli, pinched or apart all occur.
+/// For a disk it returns the vertices both charts use (the glued arc), ascending.
 #[test]
-fn union_is_disk_agrees_with_the_disk_check_of_the_union() {
+fn union_arc_agrees_with_the_disk_check_of_the_union() {
     let inputs = [
         fixtures::torus(12, 6, 2.0, 0.5),
         fixtures::uv_sphere(6, 10, 1.0),
@@ -401,14 +402,29 @@ fn union_is_disk_agrees_with_the_disk_check_of_the_union() {
                     let mut union = charts[i].clone();
                     union.extend_from_slice(&charts[j]);
                     let expected = check_chart_is_disk(&mesh, &union);
-                    let got = validate::union_is_disk(
+                    let arc = validate::union_arc(
                         &mesh, &charts[i], &charts[j], &label, i as u32, j as u32,
                     );
                     assert_eq!(
-                        got,
+                        arc.is_some(),
                         expected.is_ok(),
                         "block {block}, charts {i} and {j}: disk check says {expected:?}"
                     );
+                    if let Some(arc) = arc {
+                        let vertices_of = |c: &[FaceId]| {
+                            let mut v: Vec<_> =
+                                c.iter().flat_map(|&f| mesh.face_vertices(f)).collect();
+                            v.sort_unstable();
+                            v.dedup();
+                            v
+                        };
+                        let b = vertices_of(&charts[j]);
+                        let common: Vec<_> = vertices_of(&charts[i])
+                            .into_iter()
+                            .filter(|v| b.binary_search(v).is_ok())
+                            .collect();
+                        assert_eq!(arc, common, "block {block}, charts {i} and {j}");
+                    }
                     match expected {
                         Ok(_) => disks += 1,
                         Err(NotADisk::Disconnected { .. }) => apart += 1,

@@ -65,7 +65,7 @@
 //! passes all tests ([`ValidateOptions::merge_passes`] passes, default 3, smallest first, two
 //! neighbours tried each, no union above a tenth of the mesh's faces unless it is small,
 //! [`ValidateOptions::merge_max_chart_fraction`]; see `merge_back`). Whether a union is a disk
-//! is decided from the two charts' intersection alone (`union_is_disk`, linear in the smaller chart), not by a disk
+//! is decided from the two charts' intersection alone (`union_arc`, linear in the smaller chart), not by a disk
 //! check of the union. A union whose two maps draw their shared boundary very differently
 //! (`shared_arc_misfit` above `MERGE_MAX_ARC_MISFIT`) is not flattened: on the corpus such
 //! unions all but never passed.
@@ -1035,20 +1035,20 @@ fn merge_back(
             return Some(None);
         }
         let (ci, cj) = (i as u32, j as u32);
-        let is_disk = union_is_disk(mesh, &done[i].0, &done[j].0, label, ci, cj);
+        let arc = union_arc(mesh, &done[i].0, &done[j].0, label, ci, cj);
         debug_assert_eq!(
-            is_disk,
+            arc.is_some(),
             disk_check(mesh, union, &|f: FaceId| {
                 let l = label[f.index()];
                 l == ci || l == cj
             })
             .is_ok(),
-            "union_is_disk disagrees with disk_check"
+            "union_arc disagrees with disk_check"
         );
-        if !is_disk {
+        let Some(arc) = arc else {
             return Some(None);
-        }
-        if shared_arc_misfit(mesh, &done[i], &done[j], label, ci, cj) > MERGE_MAX_ARC_MISFIT {
+        };
+        if shared_arc_misfit(&done[i].1, &done[j].1, &arc) > MERGE_MAX_ARC_MISFIT {
             return Some(None);
         }
         let (big, small) = if done[i].0.len() > done[j].0.len() {
@@ -1203,14 +1203,16 @@ fn merge_back(
 /// not connected through glued edges; neither is a disk, and any other intersection has χ ≠ 1.
 /// So: a disk ⟺ at least one shared edge and `V − E = 1`. Debug builds check it against
 /// [`disk_check`] on every merge try.
-pub(super) fn union_is_disk(
+///
+/// Returns the vertices of that arc (ascending) when the union is a disk, `None` otherwise.
+pub(super) fn union_arc(
     mesh: &TriangleMesh,
     a: &[FaceId],
     b: &[FaceId],
     label: &[u32],
     la: u32,
     lb: u32,
-) -> bool {
+) -> Option<Vec<VertexId>> {
     let (small, own, other) = if a.len() <= b.len() {
         (a, la, lb)
     } else {
@@ -1233,18 +1235,15 @@ pub(super) fn union_is_disk(
         }
     }
     if shared_edges == 0 {
-        return false;
+        return None;
     }
     candidates.sort_unstable();
     candidates.dedup();
-    let shared_vertices = candidates
-        .iter()
-        .filter(|&&v| {
-            mesh.outgoing_halfedges(v)
-                .any(|g| label[g.face().index()] == other)
-        })
-        .count();
-    shared_vertices == shared_edges + 1
+    candidates.retain(|&v| {
+        mesh.outgoing_halfedges(v)
+            .any(|g| label[g.face().index()] == other)
+    });
+    (candidates.len() == shared_edges + 1).then_some(candidates)
 }
 
 /// A map of the union `union` (ascending) of the chart `big` and the chart `small` (faces)
@@ -1334,45 +1333,20 @@ fn extend_into(
 /// How differently the maps of two charts draw the boundary they share: the relative RMS
 /// residual `sqrt(Σ |z·(a_k − ā) − (b_k − b̄)|² / Σ |b_k − b̄|²)` of the best similarity `z`
 /// (least squares, complex `z`: rotation and scale) taking chart `a`'s UVs of the shared
-/// vertices onto chart `b`'s, both centred. 0 when they are the same curve up to a similarity
-/// (the union of two developable pieces), about 1 when no similarity relates them (e.g. one
-/// map draws the shared arc as a C and the other as a reversed C). Shared vertices: the ends of
-/// the edges between a face of `a` and a face of `b` (`label`s `la`, `lb`), ascending. Returns
-/// 0 (no evidence) with fewer than 3 shared vertices or a degenerate spread. Cost: linear in
-/// the two charts' sizes, no solve.
-fn shared_arc_misfit(
-    mesh: &TriangleMesh,
-    a: &(Vec<FaceId>, LocatedMap),
-    b: &(Vec<FaceId>, LocatedMap),
-    label: &[u32],
-    la: u32,
-    lb: u32,
-) -> f64 {
-    let (small, other) = if a.0.len() <= b.0.len() {
-        (&a.0, lb)
-    } else {
-        (&b.0, la)
-    };
-    let mut shared: Vec<VertexId> = Vec::new();
-    for &f in small {
-        for h in mesh.face_halfedges(f) {
-            if mesh.opposite(h).map(|o| label[o.face().index()]) == Some(other) {
-                shared.push(mesh.from_vertex(h));
-                shared.push(mesh.to_vertex(h));
-            }
-        }
-    }
-    shared.sort_unstable();
-    shared.dedup();
-    if shared.len() < 3 {
+/// vertices `arc` ([`union_arc`], ascending) onto chart `b`'s, both centred. 0 when they are
+/// the same curve up to a similarity (the union of two developable pieces), about 1 when no
+/// similarity relates them (e.g. one map draws the shared arc as a C and the other as a
+/// reversed C). Returns 0 (no evidence) with fewer than 3 shared vertices or a degenerate
+/// spread. Cost: linear in the two charts' vertex counts, no solve.
+fn shared_arc_misfit(a: &LocatedMap, b: &LocatedMap, arc: &[VertexId]) -> f64 {
+    if arc.len() < 3 {
         return 0.0;
     }
-    // The UVs of the shared vertices in one chart's map, in `shared` order.
-    let uvs_of = |c: &(Vec<FaceId>, LocatedMap)| -> Option<Vec<[f64; 2]>> {
-        let (map, vertices) = &c.1;
-        let mut out = vec![[f64::NAN; 2]; shared.len()];
+    // The UVs of the arc's vertices in one chart's map, in `arc` order.
+    let uvs_of = |(map, vertices): &LocatedMap| -> Option<Vec<[f64; 2]>> {
+        let mut out = vec![[f64::NAN; 2]; arc.len()];
         for (l, v) in vertices.iter().enumerate() {
-            if let Ok(k) = shared.binary_search(v) {
+            if let Ok(k) = arc.binary_search(v) {
                 out[k] = *map.uv.get(l)?;
             }
         }
