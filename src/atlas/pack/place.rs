@@ -482,7 +482,9 @@ impl Orientation {
 /// with `padding_texels`. Angle `k` is `base_angle_rad + 2πk / rotations`. With
 /// `padded_bits`, each rasterized orientation also keeps the texels of `D`
 /// ([`Orientation::dilated_bits`], one more dilation of the mask); only the hole search of
-/// [`super::hole`] reads them, so horizon packings pass `false` and get `None` there.
+/// [`super::hole`] reads them, and only when it scores candidates
+/// ([`super::HOLE_SCORED_MIN_CHARTS`]; its plain first fit tests the per-row extents), so the
+/// other packings pass `false` and get `None` there.
 pub fn orientations(
     chart: &PackChart<'_>,
     prep: &PreparedChart,
