@@ -329,6 +329,9 @@ fn add_hard_edges(mesh: &TriangleMesh, features: &mut Features, angle_rad: f64) 
 /// earlier in the window, large enough to amortise the parallel dispatch.
 const SPECULATION_WINDOW_PER_THREAD: usize = 32;
 
+/// Vertices per parallel task when [`Grower::new`] fills the rotation table.
+const RING_BLOCK_VERTICES: usize = 8192;
+
 /// An outgoing half-edge of a vertex in [`Grower::ring`]: its id, the vertex it points to, its
 /// sharpness (radians) and the position of its far end (model units), side by side for the
 /// depth-first search (one contiguous read per search node).
@@ -475,38 +478,67 @@ impl VertexSet {
 impl<'a> Grower<'a> {
     fn new(mesh: &'a TriangleMesh, sharp: &'a [f64], tau: f64, max_len: usize) -> Self {
         let nv = mesh.num_vertices();
-        // One pass into one allocation of the final size (a parallel flat-map collect built
-        // and copied per-thread pieces of this 40-byte-per-half-edge table, which cost more
-        // in page faults and copies than the pass itself).
-        let mut ring: Vec<Out> = Vec::with_capacity(mesh.num_halfedges());
-        for v in 0..nv as u32 {
-            ring.extend(
-                mesh.outgoing_halfedges(crate::mesh::VertexId(v))
-                    .map(|g| Out {
-                        sharp: sharp[g.index()],
-                        to_m: mesh.position(mesh.to_vertex(g)),
-                        g: g.0,
-                        w: mesh.to_vertex(g).0,
-                    }),
-            );
-        }
-        // Each half-edge leaves exactly one vertex, so `ring` is grouped by vertex in id order.
+        let nh = mesh.num_halfedges();
+        // `ring` grouped by vertex in id order: vertex `v`'s outgoing half-edges are its
+        // corners (one per incident face, each half-edge leaving exactly one vertex; its
+        // rotation visits them all, since every vertex's faces form one fan, a mesh
+        // invariant), so the group sizes are counted from the half-edges, and the groups are
+        // then filled in
+        // parallel, blocks of vertices into disjoint parts of one allocation of the final
+        // size (a parallel flat-map collect built and copied per-thread pieces of this
+        // 40-byte-per-half-edge table, which cost more in page faults and copies than the
+        // pass itself).
         let mut ring_start = vec![0u32; nv + 1];
-        for o in &ring {
-            ring_start[mesh.from_vertex(HalfedgeId(o.g)).index() + 1] += 1;
+        for h in mesh.halfedges() {
+            ring_start[mesh.from_vertex(h).index() + 1] += 1;
         }
         for v in 0..nv {
             ring_start[v + 1] += ring_start[v];
         }
-        let max_out = (0..nv)
-            .map(|v| {
-                ring[ring_start[v] as usize..ring_start[v + 1] as usize]
-                    .iter()
-                    .map(|o| o.sharp)
-                    .fold(0.0, f64::max)
-            })
-            .collect();
-        let nh = mesh.num_halfedges();
+        let mut ring = vec![
+            Out {
+                sharp: 0.0,
+                to_m: [0.0; 3],
+                g: 0,
+                w: 0,
+            };
+            nh
+        ];
+        let mut max_out = vec![0.0f64; nv];
+        {
+            let mut blocks = Vec::new();
+            let (mut ring_rest, mut max_rest) = (&mut ring[..], &mut max_out[..]);
+            for first in (0..nv).step_by(RING_BLOCK_VERTICES) {
+                let end = (first + RING_BLOCK_VERTICES).min(nv);
+                let len = (ring_start[end] - ring_start[first]) as usize;
+                let (r, rr) = std::mem::take(&mut ring_rest).split_at_mut(len);
+                let (m, mr) = std::mem::take(&mut max_rest).split_at_mut(end - first);
+                (ring_rest, max_rest) = (rr, mr);
+                blocks.push((first, r, m));
+            }
+            blocks.into_par_iter().for_each(|(first, r, m)| {
+                let mut k = 0;
+                for (i, slot_max) in m.iter_mut().enumerate() {
+                    let v = crate::mesh::VertexId((first + i) as u32);
+                    let mut most = 0.0f64;
+                    for g in mesh.outgoing_halfedges(v) {
+                        let o = Out {
+                            sharp: sharp[g.index()],
+                            to_m: mesh.position(mesh.to_vertex(g)),
+                            g: g.0,
+                            w: mesh.to_vertex(g).0,
+                        };
+                        most = most.max(o.sharp);
+                        if let Some(slot) = r.get_mut(k) {
+                            *slot = o;
+                        }
+                        k += 1;
+                    }
+                    *slot_max = most;
+                }
+                debug_assert_eq!(k, r.len(), "a vertex's rotation misses some of its corners");
+            });
+        }
         Grower {
             mesh,
             sharp,
@@ -520,7 +552,7 @@ impl<'a> Grower<'a> {
             accepts: 0,
             changed_at: vec![0; nv],
             max_out,
-            max_sharp: sharp.iter().copied().fold(0.0, f64::max),
+            max_sharp: sharp.par_iter().copied().reduce(|| 0.0, f64::max),
         }
     }
 
