@@ -441,94 +441,84 @@ pub(super) fn enforce_disks(
     work: Vec<Vec<FaceId>>,
     stats: &mut SegmentStats,
 ) -> Vec<Vec<FaceId>> {
+    use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
     let nf = mesh.num_faces();
     // `label[f]` is the work item currently holding `f`: O(1) membership for every check. Faces
-    // in no item keep `u32::MAX`.
-    let mut label: Vec<u32> = vec![u32::MAX; nf];
+    // in no item keep `u32::MAX`. Items are split in parallel, each by its own task (below):
+    // a task writes only the labels of its own item's faces, and every label it writes is
+    // new (from `next_label`), so the labels another task reads are that task's own or
+    // another item's, never equal to its own, whatever the interleaving. Relaxed loads
+    // and stores suffice: the value read only ever answers "is this face mine".
+    let label: Vec<AtomicU32> = (0..nf).map(|_| AtomicU32::new(u32::MAX)).collect();
     for (i, item) in work.iter().enumerate() {
         for f in item {
-            label[f.index()] = i as u32;
+            label[f.index()].store(i as u32, Relaxed);
         }
     }
-    // The given items that are already disks, found in parallel: an item's test reads only
-    // whether faces carry its own label, and no face changes to or from an item's label before
-    // that item is popped, so this is the test the loop below would make (same result, same
-    // order of `done`).
-    let already_disk: Vec<bool> = work
-        .par_iter()
+    let next_label = AtomicU32::new(work.len() as u32);
+    // Each given item, in parallel, to its disks in the order of a depth-first split (the
+    // first part's disks, then the second's), and the number of splits. The result is a
+    // function of the item alone (membership is all a task reads of the labels), so `done`
+    // is the concatenation in item order whatever the thread count.
+    let per_item: Vec<(Vec<Vec<FaceId>>, usize)> = work
+        .into_par_iter()
         .enumerate()
+        .with_max_len(1)
         .map(|(i, faces)| {
-            let inside = |f: FaceId| label[f.index()] == i as u32;
-            !faces.is_empty()
-                && flood(mesh, &faces[..1], &inside, faces).len() == faces.len()
-                && disk_check_connected(mesh, faces, &inside).is_ok()
+            let mut done = Vec::new();
+            let mut splits = 0usize;
+            let mut pending = vec![(i as u32, faces)];
+            while let Some((id, faces)) = pending.pop() {
+                if faces.is_empty() {
+                    continue;
+                }
+                let inside = |f: FaceId| label[f.index()].load(Relaxed) == id;
+                let relabel = |part: &[FaceId]| {
+                    let l = next_label.fetch_add(1, Relaxed);
+                    for &f in part {
+                        label[f.index()].store(l, Relaxed);
+                    }
+                    l
+                };
+                // Split off glued components first.
+                let comp = flood(mesh, &faces[..1], &inside, &faces);
+                if comp.len() != faces.len() {
+                    splits += 1;
+                    let mut in_comp = comp;
+                    in_comp.sort_unstable();
+                    let rest: Vec<FaceId> = faces
+                        .iter()
+                        .copied()
+                        .filter(|f| in_comp.binary_search(f).is_err())
+                        .collect();
+                    let (a, b) = (relabel(&in_comp), relabel(&rest));
+                    pending.push((b, rest));
+                    pending.push((a, in_comp));
+                    continue;
+                }
+                // `comp` covers `faces`: connected, so only the other disk tests remain.
+                if disk_check_connected(mesh, &faces, &inside).is_ok() {
+                    done.push(faces);
+                    continue;
+                }
+                if splits >= nf {
+                    // Unreachable in theory (see the module doc); a triangle is always a disk.
+                    done.extend(faces.iter().map(|&f| vec![f]));
+                    continue;
+                }
+                splits += 1;
+                let (half_a, half_b) = split_in_two(mesh, &faces, &inside);
+                let (a, b) = (relabel(&half_a), relabel(&half_b));
+                pending.push((b, half_b));
+                pending.push((a, half_a));
+            }
+            (done, splits)
         })
         .collect();
-    let given = work.len() as u32;
-    let mut next_label = work.len() as u32;
-    let mut done: Vec<Vec<FaceId>> = Vec::new();
-    let mut pending: Vec<(u32, Vec<FaceId>)> = work
-        .into_iter()
-        .enumerate()
-        .map(|(i, v)| (i as u32, v))
-        .collect();
-    pending.reverse();
-    let max_splits = nf;
-    let splits_before = stats.disk_splits;
-    while let Some((id, faces)) = pending.pop() {
-        if faces.is_empty() {
-            continue;
-        }
-        if id < given && already_disk[id as usize] {
-            done.push(faces);
-            continue;
-        }
-        let inside = |f: FaceId| label[f.index()] == id;
-        // Split off glued components first.
-        let comp = flood(mesh, &faces[..1], &inside, &faces);
-        if comp.len() != faces.len() {
-            stats.disk_splits += 1;
-            let mut in_comp = comp.clone();
-            in_comp.sort_unstable();
-            let rest: Vec<FaceId> = faces
-                .iter()
-                .copied()
-                .filter(|f| in_comp.binary_search(f).is_err())
-                .collect();
-            let (a, b) = (next_label, next_label + 1);
-            next_label += 2;
-            for &f in &in_comp {
-                label[f.index()] = a;
-            }
-            for &f in &rest {
-                label[f.index()] = b;
-            }
-            pending.push((b, rest));
-            pending.push((a, in_comp));
-            continue;
-        }
-        // `comp` covers `faces`: connected, so only the other disk tests remain.
-        if disk_check_connected(mesh, &faces, &inside).is_ok() {
-            done.push(faces);
-            continue;
-        }
-        if stats.disk_splits - splits_before >= max_splits {
-            // Unreachable in theory (see the module doc); a triangle is always a disk.
-            done.extend(faces.iter().map(|&f| vec![f]));
-            continue;
-        }
-        stats.disk_splits += 1;
-        let (half_a, half_b) = split_in_two(mesh, &faces, &inside);
-        let (a, b) = (next_label, next_label + 1);
-        next_label += 2;
-        for &f in &half_a {
-            label[f.index()] = a;
-        }
-        for &f in &half_b {
-            label[f.index()] = b;
-        }
-        pending.push((b, half_b));
-        pending.push((a, half_a));
+    let mut done = Vec::new();
+    for (disks, splits) in per_item {
+        done.extend(disks);
+        stats.disk_splits += splits;
     }
     done
 }
