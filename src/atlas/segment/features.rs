@@ -479,15 +479,13 @@ impl<'a> Grower<'a> {
     fn new(mesh: &'a TriangleMesh, sharp: &'a [f64], tau: f64, max_len: usize) -> Self {
         let nv = mesh.num_vertices();
         let nh = mesh.num_halfedges();
-        // `ring` grouped by vertex in id order: vertex `v`'s outgoing half-edges are its
-        // corners (one per incident face, each half-edge leaving exactly one vertex; its
-        // rotation visits them all, since every vertex's faces form one fan, a mesh
-        // invariant), so the group sizes are counted from the half-edges, and the groups are
-        // then filled in
-        // parallel, blocks of vertices into disjoint parts of one allocation of the final
-        // size (a parallel flat-map collect built and copied per-thread pieces of this
-        // 40-byte-per-half-edge table, which cost more in page faults and copies than the
-        // pass itself).
+        // `ring` grouped by vertex in id order. Vertex `v`'s outgoing half-edges are its
+        // corners (one per incident face; its rotation visits them all, since every vertex's
+        // faces form one fan, a mesh invariant), so the group sizes are counted from the
+        // half-edges first; then blocks of vertices fill their groups in parallel, into
+        // disjoint parts of one allocation of the final size (a parallel flat-map collect
+        // built and copied per-thread pieces of this 40-byte-per-half-edge table, which cost
+        // more in page faults and copies than the pass itself).
         let mut ring_start = vec![0u32; nv + 1];
         for h in mesh.halfedges() {
             ring_start[mesh.from_vertex(h).index() + 1] += 1;
@@ -504,41 +502,45 @@ impl<'a> Grower<'a> {
             };
             nh
         ];
-        let mut max_out = vec![0.0f64; nv];
         {
             let mut blocks = Vec::new();
-            let (mut ring_rest, mut max_rest) = (&mut ring[..], &mut max_out[..]);
+            let mut rest = &mut ring[..];
             for first in (0..nv).step_by(RING_BLOCK_VERTICES) {
                 let end = (first + RING_BLOCK_VERTICES).min(nv);
                 let len = (ring_start[end] - ring_start[first]) as usize;
-                let (r, rr) = std::mem::take(&mut ring_rest).split_at_mut(len);
-                let (m, mr) = std::mem::take(&mut max_rest).split_at_mut(end - first);
-                (ring_rest, max_rest) = (rr, mr);
-                blocks.push((first, r, m));
+                let (block, after) = std::mem::take(&mut rest).split_at_mut(len);
+                rest = after;
+                blocks.push((first..end, block));
             }
-            blocks.into_par_iter().for_each(|(first, r, m)| {
-                let mut k = 0;
-                for (i, slot_max) in m.iter_mut().enumerate() {
-                    let v = crate::mesh::VertexId((first + i) as u32);
-                    let mut most = 0.0f64;
-                    for g in mesh.outgoing_halfedges(v) {
-                        let o = Out {
-                            sharp: sharp[g.index()],
-                            to_m: mesh.position(mesh.to_vertex(g)),
-                            g: g.0,
-                            w: mesh.to_vertex(g).0,
-                        };
-                        most = most.max(o.sharp);
-                        if let Some(slot) = r.get_mut(k) {
-                            *slot = o;
+            blocks.into_par_iter().for_each(|(vertices, block)| {
+                let mut slots = block.iter_mut();
+                for v in vertices {
+                    for g in mesh.outgoing_halfedges(crate::mesh::VertexId(v as u32)) {
+                        if let Some(slot) = slots.next() {
+                            *slot = Out {
+                                sharp: sharp[g.index()],
+                                to_m: mesh.position(mesh.to_vertex(g)),
+                                g: g.0,
+                                w: mesh.to_vertex(g).0,
+                            };
                         }
-                        k += 1;
                     }
-                    *slot_max = most;
                 }
-                debug_assert_eq!(k, r.len(), "a vertex's rotation misses some of its corners");
+                debug_assert!(
+                    slots.next().is_none(),
+                    "a vertex's rotation misses some of its corners"
+                );
             });
         }
+        let max_out = (0..nv)
+            .into_par_iter()
+            .map(|v| {
+                ring[ring_start[v] as usize..ring_start[v + 1] as usize]
+                    .iter()
+                    .map(|o| o.sharp)
+                    .fold(0.0, f64::max)
+            })
+            .collect();
         Grower {
             mesh,
             sharp,
