@@ -12,8 +12,11 @@
 //!   request, records the latency metric and echoes `x-request-id`.
 //! - Memory per request is bounded: uploads stream to spool files (`upload.rs`), results are
 //!   read whole from the blob store (bounded by what an upload may produce).
+//! - A request refused before its body was read gets its answer, not a TCP reset: the
+//!   `drain` middleware reads and drops the rest of the body first, within fixed bounds.
 //! - No SQL here (`tests/architecture.rs`): the store is reached through `jobs` only.
 mod auth;
+mod drain;
 mod error;
 mod handlers;
 mod upload;
@@ -110,6 +113,8 @@ pub fn router(
         .method_not_allowed_fallback(handlers::method_not_allowed)
         // Uploads are bounded by our own streaming limit, not by a buffered-body limit.
         .layer(DefaultBodyLimit::disable())
+        // A refused upload's unread bytes are drained so the refusal reaches the client.
+        .layer(middleware::from_fn(drain::drain_unread_bodies))
         .layer(middleware::from_fn_with_state(state.clone(), log_requests))
         .with_state(state.clone());
     if let Some(cors) = cors_layer(&state.config.cors_origins) {
