@@ -918,7 +918,14 @@ async fn real_pipeline_unwraps_fixtures_end_to_end() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn finished_jobs_expire_and_the_sweeper_deletes_them_with_their_files() {
-    let s = Server::start_with(Fake::instant(), |c| c.jobs.retention = Duration::ZERO).await;
+    // The job takes about 1 s (four 250 ms stages), so it cannot have finished and been swept
+    // (every 100 ms) before the check that its input is stored; with the instant fake a loaded
+    // machine could deschedule the test for the ~4 ms the job took.
+    let slow = Arc::new(Fake {
+        steps: 1,
+        step: Duration::from_millis(250),
+    });
+    let s = Server::start_with(slow, |c| c.jobs.retention = Duration::ZERO).await;
     let c = client();
     let job = submit_ok(&c, &s, fixture("Box.glb"), "").await;
     let id = job["id"].as_str().unwrap();
