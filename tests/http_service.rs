@@ -575,6 +575,63 @@ async fn refusals_before_the_body_is_read_arrive_intact() {
     s.stop().await.unwrap();
 }
 
+/// An upload whose bytes stop coming is dropped after the idle timeout with a 408, and leaves
+/// no spool file; the server answers the next upload as usual.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_stalled_upload_gets_408_and_leaves_nothing() {
+    let s = Server::start_with(Fake::instant(), |c| {
+        c.http.upload_idle_timeout = Duration::from_millis(300)
+    })
+    .await;
+    let c = client();
+    // Raw and multipart: a first chunk, then nothing (the sender stays alive, so the body
+    // neither ends nor fails).
+    for multipart in [false, true] {
+        let (tx, rx) = tokio::sync::mpsc::channel::<Result<Vec<u8>, std::io::Error>>(1);
+        let first = if multipart {
+            b"--b\r\ncontent-disposition: form-data; name=\"asset\"; filename=\"a.glb\"\r\n\r\nglTF"
+                .to_vec()
+        } else {
+            b"glTF\x02\x00\x00\x00".to_vec()
+        };
+        tx.send(Ok(first)).await.unwrap();
+        let body = reqwest::Body::wrap_stream(futures_util::stream::unfold(rx, |mut rx| async {
+            rx.recv().await.map(|item| (item, rx))
+        }));
+        let content_type = if multipart {
+            "multipart/form-data; boundary=b"
+        } else {
+            "model/gltf-binary"
+        };
+        let started = std::time::Instant::now();
+        let send = c
+            .post(s.url("/v1/jobs"))
+            .header("content-type", content_type)
+            .body(body)
+            .send();
+        let r = tokio::time::timeout(Duration::from_secs(10), send)
+            .await
+            .expect("no answer within 10 s to a stalled upload")
+            .unwrap();
+        let waited = started.elapsed();
+        let p = assert_problem(r, 408, "upload_stalled").await;
+        assert!(p["detail"].as_str().unwrap().contains("0.3 s"), "{p}");
+        assert!(
+            waited >= Duration::from_millis(300) && waited < Duration::from_secs(5),
+            "answered after {waited:?}"
+        );
+        drop(tx);
+    }
+    let spool: Vec<_> = std::fs::read_dir(s.data_dir().join("spool"))
+        .unwrap()
+        .collect();
+    assert!(spool.is_empty(), "{spool:?}");
+    let list: Value = get_json(&c, s.url("/v1/jobs")).await;
+    assert_eq!(list["jobs"], json!([]));
+    submit_ok(&c, &s, fixture("Box.glb"), "").await;
+    s.stop().await.unwrap();
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn hostile_buffer_uris_are_refused_without_opening_anything() {
     let s = Server::start().await;

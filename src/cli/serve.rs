@@ -35,6 +35,9 @@ pub struct ServeArgs {
     /// Largest upload (all parts together), bytes.
     #[arg(long, env = "TEXATLAS_MAX_UPLOAD_BYTES", default_value_t = 256 << 20)]
     pub max_upload_bytes: u64,
+    /// Longest wait for the next bytes of an upload, seconds; a stalled upload gets 408.
+    #[arg(long, env = "TEXATLAS_UPLOAD_IDLE_TIMEOUT_S", default_value_t = 60, value_parser = clap::value_parser!(u64).range(1..))]
+    pub upload_idle_timeout_s: u64,
     /// Most triangles per asset.
     #[arg(long, env = "TEXATLAS_MAX_TRIANGLES", default_value_t = 1 << 24)]
     pub max_triangles: u64,
@@ -84,6 +87,7 @@ impl ServeArgs {
             http: HttpConfig {
                 api_keys: self.api_keys.clone(),
                 max_upload_bytes: self.max_upload_bytes,
+                upload_idle_timeout: Duration::from_secs(self.upload_idle_timeout_s),
                 cors_origins: self.cors_origins.clone(),
             },
             shutdown_grace: Duration::from_secs(self.shutdown_grace_s),

@@ -20,7 +20,7 @@
 //! # Bounds
 //! Draining is bounded, so a refused client cannot hold the server: at most
 //! [`DRAIN_MAX_BYTES`] and [`DRAIN_MAX_TIME`]; a body declared longer than that is not drained
-//! at all. Clients that send such bodies should send `Expect: 100-continue`: they then see the
+//! at all, nor is the body of a stalled upload (`408`). Clients that send such bodies should send `Expect: 100-continue`: they then see the
 //! refusal before sending anything, as a body that was never asked for is not drained either.
 use std::pin::Pin;
 use std::sync::{Arc, Mutex, PoisonError};
@@ -97,6 +97,8 @@ pub(crate) async fn drain_unread_bodies(req: Request, next: Next) -> Response {
     }));
     let req = Request::from_parts(parts, Body::from_stream(TailBody(tail.clone())));
     let response = next.run(req).await;
+    // A stalled upload (408) would only stall the drain too.
+    let stalled = response.status() == axum::http::StatusCode::REQUEST_TIMEOUT;
     let (stream, left, asked) = {
         let mut t = tail.lock().unwrap_or_else(PoisonError::into_inner);
         if t.ended {
@@ -109,7 +111,7 @@ pub(crate) async fn drain_unread_bodies(req: Request, next: Next) -> Response {
     };
     let drained_to_end = match stream {
         None => false,
-        Some(_) if !asked || left.is_some_and(|n| n > DRAIN_MAX_BYTES) => false,
+        Some(_) if stalled || !asked || left.is_some_and(|n| n > DRAIN_MAX_BYTES) => false,
         Some(mut stream) => {
             let drain = async {
                 let mut drained = 0u64;

@@ -12,7 +12,7 @@ use serde::Deserialize;
 
 use super::auth::Owner;
 use super::error::ApiError;
-use super::upload::read_upload;
+use super::upload::{read_upload, UploadLimits};
 use super::AppState;
 use crate::api::{rfc3339_from_ms, ApiProblemJson, JobJson, JobListJson, LinksJson, ProgressJson};
 use crate::jobs::{
@@ -98,7 +98,11 @@ pub(crate) async fn submit(
         ));
     }
     let key = idempotency_key(req.headers())?;
-    let parsed = read_upload(&state.jobs, req, state.config.max_upload_bytes).await?;
+    let limits = UploadLimits {
+        max_bytes: state.config.max_upload_bytes,
+        idle_timeout: state.config.upload_idle_timeout,
+    };
+    let parsed = read_upload(&state.jobs, req, limits).await?;
     let upload = Upload {
         asset: parsed.asset,
         resources: parsed.resources,

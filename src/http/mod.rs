@@ -47,6 +47,9 @@ pub struct HttpConfig {
     pub api_keys: Vec<String>,
     /// Largest upload over all parts, bytes. Default 256 MiB.
     pub max_upload_bytes: u64,
+    /// Longest wait for the next bytes of an upload's body; past it the upload is refused
+    /// (`408 upload_stalled`) and its spool files removed. Default 60 s.
+    pub upload_idle_timeout: std::time::Duration,
     /// Origins allowed by CORS (`*` for any); empty: no CORS headers.
     pub cors_origins: Vec<String>,
 }
@@ -56,6 +59,7 @@ impl Default for HttpConfig {
         HttpConfig {
             api_keys: Vec::new(),
             max_upload_bytes: 256 << 20,
+            upload_idle_timeout: std::time::Duration::from_secs(60),
             cors_origins: Vec::new(),
         }
     }

@@ -1,6 +1,7 @@
 //! `POST /v1/jobs` bodies → spool files, with bounded memory: chunks go to disk as they arrive,
 //! and the total over all parts is held to the upload limit (413 past it, also up front from
-//! `Content-Length`).
+//! `Content-Length`), and a body whose next bytes take longer than the idle timeout is
+//! dropped (408), so a stalled or trickling client holds no spool file for ever.
 //!
 //! The three forms (proto/openapi.json):
 //! - `model/gltf-binary` or `model/gltf+json`: the asset is the body, options are query
@@ -23,6 +24,36 @@ use crate::jobs::{JobService, SpooledPart};
 const MAX_OPTIONS_BYTES: usize = 64 * 1024;
 /// Most parts of a multipart upload.
 const MAX_PARTS: usize = 256;
+
+/// The bounds of one upload.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct UploadLimits {
+    /// Largest upload over all parts, bytes.
+    pub max_bytes: u64,
+    /// Longest wait for the next bytes of the body.
+    pub idle_timeout: std::time::Duration,
+}
+
+/// `fut` (the next bytes of the body, or what needs them), or `408 upload_stalled` when it
+/// takes longer than the idle timeout.
+async fn within<T>(
+    limits: UploadLimits,
+    fut: impl std::future::Future<Output = T>,
+) -> Result<T, ApiError> {
+    tokio::time::timeout(limits.idle_timeout, fut)
+        .await
+        .map_err(|_| {
+            ApiError::new(
+                axum::http::StatusCode::REQUEST_TIMEOUT,
+                "upload_stalled",
+                format!(
+                    "no bytes of the upload arrived for {:.1} s, so it was dropped; check the \
+                     connection and send it again",
+                    limits.idle_timeout.as_secs_f64()
+                ),
+            )
+        })
+}
 
 /// What a request body turned into.
 pub(crate) struct Parsed {
@@ -48,7 +79,7 @@ async fn spool<S, E>(
     mut chunks: S,
     name: String,
     budget: &mut u64,
-    limit: u64,
+    limits: UploadLimits,
 ) -> Result<SpooledPart, ApiError>
 where
     S: futures_util::Stream<Item = Result<bytes_like::Bytes, E>> + Unpin,
@@ -60,7 +91,7 @@ where
         .map_err(|e| ApiError::internal(format!("creating {}: {e}", path.display())))?;
     // From here the part owns the file and removes it on any early return.
     let mut part = SpooledPart::new(path, name, 0);
-    while let Some(chunk) = chunks.next().await {
+    while let Some(chunk) = within(limits, chunks.next()).await? {
         let chunk = chunk.map_err(|e| {
             ApiError::bad_request(
                 "upload_interrupted",
@@ -69,7 +100,7 @@ where
         })?;
         let n = chunk.len() as u64;
         if n > *budget {
-            return Err(too_large(limit));
+            return Err(too_large(limits.max_bytes));
         }
         *budget -= n;
         part.size += n;
@@ -189,8 +220,9 @@ fn media_type(headers: &HeaderMap) -> String {
 pub(crate) async fn read_upload(
     jobs: &JobService,
     req: Request,
-    limit: u64,
+    limits: UploadLimits,
 ) -> Result<Parsed, ApiError> {
+    let limit = limits.max_bytes;
     let declared = req
         .headers()
         .get(header::CONTENT_LENGTH)
@@ -209,7 +241,7 @@ pub(crate) async fn read_upload(
                 body.into_data_stream(),
                 "asset".into(),
                 &mut budget,
-                limit,
+                limits,
             )
             .await?;
             if asset.size == 0 {
@@ -224,7 +256,7 @@ pub(crate) async fn read_upload(
                 options,
             })
         }
-        "multipart/form-data" => read_multipart(jobs, req, &mut budget, limit).await,
+        "multipart/form-data" => read_multipart(jobs, req, &mut budget, limits).await,
         other => Err(ApiError::new(
             axum::http::StatusCode::UNSUPPORTED_MEDIA_TYPE,
             "unsupported_media_type",
@@ -242,8 +274,9 @@ async fn read_multipart(
     jobs: &JobService,
     req: Request,
     budget: &mut u64,
-    limit: u64,
+    limits: UploadLimits,
 ) -> Result<Parsed, ApiError> {
+    let limit = limits.max_bytes;
     let query_options = req.uri().query().filter(|q| !q.is_empty()).is_some();
     let mut options = options_from_query(req.uri().query())?;
     let mut multipart = Multipart::from_request(req, &()).await.map_err(|e| {
@@ -266,7 +299,7 @@ async fn read_multipart(
     let mut resources: BTreeMap<String, SpooledPart> = BTreeMap::new();
     let mut saw_options = false;
     let mut parts = 0usize;
-    while let Some(mut field) = multipart.next_field().await.map_err(bad)? {
+    while let Some(mut field) = within(limits, multipart.next_field()).await?.map_err(bad)? {
         parts += 1;
         if parts > MAX_PARTS {
             return Err(ApiError::bad_request(
@@ -285,7 +318,7 @@ async fn read_multipart(
             }
             saw_options = true;
             let mut text = Vec::new();
-            while let Some(chunk) = field.chunk().await.map_err(bad)? {
+            while let Some(chunk) = within(limits, field.chunk()).await?.map_err(bad)? {
                 if text.len() + chunk.len() > MAX_OPTIONS_BYTES {
                     return Err(ApiError::bad_request(
                         "invalid_options",
@@ -314,7 +347,7 @@ async fn read_multipart(
                     "more than one `asset` part; send exactly one",
                 ));
             }
-            let part = spool(jobs, stream, "asset".into(), budget, limit).await?;
+            let part = spool(jobs, stream, "asset".into(), budget, limits).await?;
             asset = Some(part);
         } else {
             // A resource: named by its file name (the URI in the .gltf), else the field name.
@@ -326,7 +359,7 @@ async fn read_multipart(
                      the .gltf uses for them",
                 ));
             }
-            let part = spool(jobs, stream, uri.clone(), budget, limit).await?;
+            let part = spool(jobs, stream, uri.clone(), budget, limits).await?;
             resources.insert(uri, part);
         }
     }
