@@ -9,9 +9,9 @@
 //! dropped body before writing the response head, which is a race. When it lost the race, a
 //! client that pools connections sends its next request on a connection the server is closing
 //! and gets "incomplete message" (CI saw exactly this once: the multipart 413 of
-//! `tests/http_service.rs`, right after another refused upload; here the stress test of
-//! `refusals_before_the_body_is_read_arrive_intact` failed in 2 of 9 runs without this
-//! middleware, and in 0 of 8 with the client's pool turned off). Closing with unread bytes in
+//! `tests/http_service.rs`, right after another refused upload; here, without this middleware,
+//! the stress test `refusals_before_the_body_is_read_arrive_intact` failed in 1 of 6 runs, and
+//! in 0 of 8 with the client's pool turned off). Closing with unread bytes in
 //! the socket also makes the kernel answer with a TCP reset, which can overtake the response.
 //! Draining the rest of the body, as nginx's lingering close does, leaves the connection clean
 //! and reusable; when the body is not drained to its end, the response says
@@ -20,8 +20,9 @@
 //! # Bounds
 //! Draining is bounded, so a refused client cannot hold the server: at most
 //! [`DRAIN_MAX_BYTES`] and [`DRAIN_MAX_TIME`]; a body declared longer than that is not drained
-//! at all, nor is the body of a stalled upload (`408`). Clients that send such bodies should send `Expect: 100-continue`: they then see the
-//! refusal before sending anything, as a body that was never asked for is not drained either.
+//! at all, nor is the body of a stalled upload (`408`: draining it would only wait). Clients
+//! that send big bodies should send `Expect: 100-continue`: they then see the refusal before
+//! sending anything, as a body that was never asked for is not drained either.
 use std::pin::Pin;
 use std::sync::{Arc, Mutex, PoisonError};
 use std::task::{Context, Poll};
@@ -35,9 +36,9 @@ use axum::response::Response;
 use futures_util::{Stream, StreamExt as _};
 
 /// Most bytes of a refused body read and dropped.
-pub(crate) const DRAIN_MAX_BYTES: u64 = 32 << 20;
+const DRAIN_MAX_BYTES: u64 = 32 << 20;
 /// Longest time spent draining a refused body.
-pub(crate) const DRAIN_MAX_TIME: Duration = Duration::from_secs(5);
+const DRAIN_MAX_TIME: Duration = Duration::from_secs(5);
 
 /// The request body, shared between the handler (through [`TailBody`]) and the middleware.
 struct Tail {
@@ -96,7 +97,7 @@ pub(crate) async fn drain_unread_bodies(req: Request, next: Next) -> Response {
         read_bytes: 0,
     }));
     let req = Request::from_parts(parts, Body::from_stream(TailBody(tail.clone())));
-    let response = next.run(req).await;
+    let mut response = next.run(req).await;
     // A stalled upload (408) would only stall the drain too.
     let stalled = response.status() == axum::http::StatusCode::REQUEST_TIMEOUT;
     let (stream, left, asked) = {
@@ -133,7 +134,6 @@ pub(crate) async fn drain_unread_bodies(req: Request, next: Next) -> Response {
                 .unwrap_or(false)
         }
     };
-    let mut response = response;
     if !drained_to_end {
         // hyper closes the connection; say so, so that no client reuses it.
         response

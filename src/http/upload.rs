@@ -1,7 +1,8 @@
 //! `POST /v1/jobs` bodies → spool files, with bounded memory: chunks go to disk as they arrive,
 //! and the total over all parts is held to the upload limit (413 past it, also up front from
 //! `Content-Length`), and a body whose next bytes take longer than the idle timeout is
-//! dropped (408), so a stalled or trickling client holds no spool file for ever.
+//! dropped (408), so a stalled client holds no spool file for ever (a client that trickles a
+//! byte now and then, within the timeout each time, is not bounded in time yet).
 //!
 //! The three forms (proto/openapi.json):
 //! - `model/gltf-binary` or `model/gltf+json`: the asset is the body, options are query
