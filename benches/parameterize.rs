@@ -165,7 +165,7 @@ struct BenchRow {
 
 fn main() -> ExitCode {
     #[cfg(test)]
-    if !common::is_child_invocation() {
+    if common::is_self_test_invocation() {
         return common::run_self_tests(self_tests::TESTS);
     }
     let cli = Cli::parse();

@@ -103,7 +103,7 @@ struct ChildArgs {
 
 fn main() -> ExitCode {
     #[cfg(test)]
-    if !common::is_child_invocation() {
+    if common::is_self_test_invocation() {
         return common::run_self_tests(self_tests::TESTS);
     }
     let cli = Cli::parse();

@@ -39,9 +39,12 @@ pub fn fixture(name: &str) -> std::path::PathBuf {
         .join(name)
 }
 
-/// Whether this process was started as a measurement child (`EXE child …`).
-pub fn is_child_invocation() -> bool {
-    std::env::args().nth(1).as_deref() == Some("child")
+/// Whether a bench compiled with `cfg(test)` was started to run its self-tests: by `cargo test`,
+/// not as a measurement child (`EXE child …`) and not by `cargo bench`, which also compiles the
+/// benches with `cfg(test)` (they have `test = true`) and passes `--bench`.
+pub fn is_self_test_invocation() -> bool {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    args.first().map(String::as_str) != Some("child") && !args.iter().any(|a| a == "--bench")
 }
 
 /// The test runner of a bench built by `cargo test` (the bench targets have no libtest harness):
