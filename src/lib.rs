@@ -32,7 +32,6 @@
 //! - [`preview`]: the `--preview` PNG of a page's UV layout.
 //! - [`gltf_io`]: the only module that knows glTF: decode (with JSON paths for every defect) and
 //!   encode (split vertices at UV seams, carry everything else through).
-//! - [`bench`](mod@bench): `texatlas bench` measurements (not core: uses time, processes, files).
 //! - [`inspect`]: the `texatlas inspect` report (plain data, built from `gltf_io` + `mesh`).
 //! - [`storage`]: the persistent state of the service behind two traits, `JobStore` (a
 //!   lease-based job queue) and `BlobStore`; SQLite and local files today. The only SQL.
@@ -58,7 +57,6 @@
 //!   normalized to \[0,1\], angles are in radians (`_rad`).
 pub mod api;
 pub mod atlas;
-pub mod bench;
 pub mod gltf_io;
 pub mod http;
 pub mod inspect;

@@ -24,9 +24,6 @@ enum Command {
     /// Cut, flatten and pack every triangle mesh of a glTF asset into one atlas and write the
     /// asset back with the new UVs (plus `--report` JSON and `--preview` PNG).
     Unwrap(cli::unwrap::UnwrapArgs),
-    /// Measurements: `texatlas bench [FILES…] [--peers]` (whole pipeline beside xatlas and
-    /// uvunwrap), `texatlas bench parameterize` (LSCM direct vs CG vs HLSCM).
-    Bench(cli::bench::BenchArgs),
     /// The HTTP service: upload assets, poll jobs, download results (see README, "Service").
     Serve(cli::serve::ServeArgs),
 }
@@ -36,7 +33,6 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Inspect(args) => cli::inspect::run(&args),
         Command::Unwrap(args) => cli::unwrap::run(&args),
-        Command::Bench(command) => cli::bench::run(&command),
         Command::Serve(args) => cli::serve::run(&args),
     };
     match result {

@@ -1,4 +1,3 @@
-pub mod bench;
 pub mod inspect;
 pub mod load;
 pub mod serve;

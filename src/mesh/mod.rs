@@ -62,6 +62,7 @@
 mod build;
 mod components;
 mod defect;
+#[cfg(any(test, feature = "test-support"))]
 pub mod fixtures;
 mod geometry;
 mod ids;

@@ -51,6 +51,7 @@ pub mod hole;
 pub mod horizon;
 pub mod place;
 pub mod raster;
+#[cfg(any(test, feature = "test-support"))]
 pub mod test_charts;
 
 #[cfg(test)]

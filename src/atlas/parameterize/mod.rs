@@ -23,6 +23,7 @@ pub mod chart;
 pub mod hlscm;
 pub mod lscm;
 pub mod progressive_mesh;
+#[cfg(any(test, feature = "test-support"))]
 pub mod test_meshes;
 
 use std::ops::ControlFlow;

@@ -1,12 +1,13 @@
-//! `texatlas bench [FILES…] [--peers]`: the whole pipeline per file, beside xatlas and uvunwrap.
+//! `cargo bench --bench pipeline -- [FILES…] [--peers] [--eval] [--eval-dir DIR]`: the whole
+//! pipeline per file, beside xatlas and uvunwrap.
 //!
-//! Purpose: the measurement behind issue 5's targets (time, memory and quality next to the
-//! peers, on the same machine, in the same run).
+//! Purpose: time, memory and quality next to the peers, on the same machine, in the same run.
 //!
 //! How, per file:
-//! - **texatlas** runs in a child process of the same binary (hidden `bench pipeline-child`), so
-//!   its peak memory (`VmHWM`) is its own. Timed: mesh build, the four stages, encode (not the
-//!   file read or write). Quality: our report (`quality.*`).
+//! - **texatlas** runs in a child process of this executable (subcommand `child`), so its peak
+//!   memory (`VmHWM`) is its own. Timed, by `texatlas::unwrap::unwrap_asset` as `texatlas
+//!   unwrap` does: mesh build, the four stages, encode (not the file read or write). Quality:
+//!   our report (`quality.*`).
 //! - with `--peers`, **xatlas** and **uvunwrap** run through `$EVAL_DIR/peer_xatlas.py` and
 //!   `peer_uvunwrap.py` (`pip install xatlas uvunwrap numpy`), each in a Python wrapper that
 //!   reads the child's peak RSS (`getrusage(RUSAGE_CHILDREN)`); their time is the peer's own
@@ -14,57 +15,244 @@
 //!   peers). Then `atlas_eval.py` measures **all three outputs** (ours included), so the quality
 //!   columns compare like with like; our own report's figures are kept beside them.
 //!
-//! This module is NOT core: it uses wall-clock time, processes and the filesystem.
+//! `EVAL_DIR` is `--eval-dir`, else `$TEXATLAS_EVAL_DIR`, else `../shared/eval`; the corpus (used
+//! when no file is given) is `--corpus`, else `$TEXATLAS_CORPUS_DIR`, else `../shared/corpus`.
+//! Paths are relative to the repository root (where `cargo bench` runs the bench).
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, ExitCode};
 use std::time::Duration;
 
 use anyhow::{bail, Context as _};
+use clap::{Parser, Subcommand};
 use serde::{Deserialize, Serialize};
+use texatlas::api::{OptionsJson, ResolutionJson};
+use texatlas::atlas::NoProgress;
+use texatlas::unwrap::unwrap_asset;
+
+mod common;
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "pipeline",
+    about = "The whole pipeline on files, beside xatlas and uvunwrap",
+    args_conflicts_with_subcommands = true
+)]
+struct Cli {
+    #[command(subcommand)]
+    child: Option<ChildCommand>,
+    #[command(flatten)]
+    args: PipelineArgs,
+}
+
+/// The whole pipeline on files, beside the peers.
+#[derive(Debug, clap::Args)]
+struct PipelineArgs {
+    /// glTF assets to unwrap. Default: every `.glb` in --corpus.
+    files: Vec<PathBuf>,
+    /// Where to find the corpus when no file is given.
+    #[arg(long, env = "TEXATLAS_CORPUS_DIR", default_value = "../shared/corpus")]
+    corpus: PathBuf,
+    /// Leave out files whose name contains this (repeatable), e.g. `--skip 1M`.
+    #[arg(long)]
+    skip: Vec<String>,
+    /// Also run xatlas and uvunwrap (`pip install xatlas uvunwrap numpy`) on the same files and
+    /// measure every output with the evaluator; print the ratios.
+    #[arg(long)]
+    peers: bool,
+    /// Measure our outputs with the evaluator too (implied by --peers).
+    #[arg(long)]
+    eval: bool,
+    /// Directory of atlas_eval.py and the peer scripts.
+    #[arg(long, env = "TEXATLAS_EVAL_DIR", default_value = "../shared/eval")]
+    eval_dir: PathBuf,
+    /// Page side in texels.
+    #[arg(long, default_value_t = 1024)]
+    resolution: u32,
+    /// Padding in texels.
+    #[arg(long, default_value_t = 2)]
+    padding: u32,
+    /// Stop a peer after this many seconds (xatlas takes minutes on 100k triangles).
+    #[arg(long, default_value_t = 900.0)]
+    peer_timeout_s: f64,
+    /// Print JSON rows instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Passed by `cargo bench`; ignored.
+    #[arg(long = "bench", hide = true)]
+    cargo_bench: bool,
+}
+
+#[derive(Debug, Subcommand)]
+enum ChildCommand {
+    /// Internal: unwrap one file in this process and print one JSON row.
+    #[command(hide = true)]
+    Child(ChildArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct ChildArgs {
+    #[arg(long)]
+    input: PathBuf,
+    #[arg(long)]
+    output: PathBuf,
+    #[arg(long)]
+    resolution: u32,
+    #[arg(long)]
+    padding: u32,
+}
+
+fn main() -> ExitCode {
+    #[cfg(test)]
+    if common::is_self_test_invocation() {
+        return common::run_self_tests(self_tests::TESTS);
+    }
+    let cli = Cli::parse();
+    let result = match &cli.child {
+        Some(ChildCommand::Child(args)) => child(args),
+        None => bench(&cli.args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("pipeline bench: error: {err:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn bench(args: &PipelineArgs) -> anyhow::Result<()> {
+    let json = args.json;
+    let rows = run(args, |row| {
+        if !json {
+            match &row.error {
+                Some(e) => eprintln!("{} {}: failed: {e}", row.file, row.tool),
+                None => eprintln!(
+                    "{} {}: {:.3} s, {:.0} MiB",
+                    row.file, row.tool, row.total_s, row.peak_mib
+                ),
+            }
+        }
+    })?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+    } else {
+        print!("{}", format_table(&rows));
+    }
+    Ok(())
+}
+
+/// The files of `args`, every tool on each.
+fn run(args: &PipelineArgs, on_row: impl FnMut(&PipelineRow)) -> anyhow::Result<Vec<PipelineRow>> {
+    let mut files = if args.files.is_empty() {
+        corpus_files(&args.corpus).with_context(|| {
+            "no files given and no corpus found; pass files or --corpus DIR".to_string()
+        })?
+    } else {
+        args.files.clone()
+    };
+    files.retain(|f| {
+        let name = f.to_string_lossy();
+        !args.skip.iter().any(|s| name.contains(s.as_str()))
+    });
+    if files.is_empty() {
+        bail!("no files to benchmark");
+    }
+    let work_dir = tempfile::Builder::new()
+        .prefix("texatlas-bench-")
+        .tempdir()
+        .context("creating a work directory")?;
+    let config = BenchConfig {
+        exe: std::env::current_exe()?,
+        eval_dir: args.eval_dir.clone(),
+        peers: args.peers,
+        eval: args.eval,
+        resolution: args.resolution,
+        padding: args.padding,
+        peer_timeout: Duration::from_secs_f64(args.peer_timeout_s.max(1.0)),
+        work_dir: work_dir.path().to_path_buf(),
+    };
+    run_bench(&files, &config, on_row)
+}
+
+fn child(args: &ChildArgs) -> anyhow::Result<()> {
+    let loaded = common::load_asset(&args.input)?;
+    let options = OptionsJson {
+        resolution: Some(ResolutionJson::Square(args.resolution)),
+        padding_texels: Some(args.padding),
+        ..OptionsJson::default()
+    };
+    let settings = options.to_settings()?;
+    let unwrapped = unwrap_asset(&loaded.asset, &settings, &mut NoProgress)
+        .with_context(|| format!("unwrapping {}", args.input.display()))?;
+    std::fs::write(&args.output, &unwrapped.encoded.bytes)
+        .with_context(|| format!("writing {}", args.output.display()))?;
+    let t = &unwrapped.timings;
+    let report = serde_json::to_value(&unwrapped.report)?;
+    let row = PipelineRow {
+        file: String::new(),
+        tool: "texatlas".into(),
+        triangles: unwrapped.triangles,
+        stages_s: Some([
+            t.build_s,
+            t.stages_s[0],
+            t.stages_s[1],
+            t.stages_s[2],
+            t.stages_s[3],
+            t.encode_s,
+        ]),
+        total_s: t.total_s,
+        peak_mib: common::peak_rss_mib(),
+        eval: None,
+        report: Quality::from_report(&report),
+        error: None,
+    };
+    println!("{}", serde_json::to_string(&row)?);
+    Ok(())
+}
 
 /// One row of the table: one tool on one file.
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
-pub struct PipelineRow {
+struct PipelineRow {
     /// File name.
-    pub file: String,
+    file: String,
     /// `texatlas`, `xatlas` or `uvunwrap`.
-    pub tool: String,
+    tool: String,
     /// Triangles of the input.
-    pub triangles: usize,
+    triangles: usize,
     /// Seconds per stage (texatlas only): build, segment, parameterize, pack, measure, encode.
-    pub stages_s: Option<[f64; 6]>,
+    stages_s: Option<[f64; 6]>,
     /// Seconds of the timed part (see the module doc).
-    pub total_s: f64,
+    total_s: f64,
     /// Peak resident memory of the process that did the work, MiB.
-    pub peak_mib: f64,
+    peak_mib: f64,
     /// Quality of the output as the evaluator measured it (`None` without `--peers`/`--eval`).
-    pub eval: Option<Quality>,
+    eval: Option<Quality>,
     /// Quality from texatlas's own report (texatlas only).
-    pub report: Option<Quality>,
+    report: Option<Quality>,
     /// Why the tool failed on this file, if it did.
-    pub error: Option<String>,
+    error: Option<String>,
 }
 
 /// The quality columns.
 #[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq)]
-pub struct Quality {
+struct Quality {
     /// Charts.
-    pub charts: u64,
+    charts: u64,
     /// Sander L2 stretch (global normalisation).
-    pub l2: f64,
+    l2: f64,
     /// Symmetric L∞ stretch.
-    pub linf: f64,
+    linf: f64,
     /// Σ UV area / page area.
-    pub packing: f64,
+    packing: f64,
     /// Flipped triangles.
-    pub flipped: u64,
+    flipped: u64,
     /// Overlapping triangle pairs.
-    pub overlaps: u64,
+    overlaps: u64,
 }
 
 impl Quality {
     /// The quality keys of an `atlas_eval.py --json` object.
-    pub fn from_eval(v: &serde_json::Value) -> Option<Quality> {
+    fn from_eval(v: &serde_json::Value) -> Option<Quality> {
         let f = |p: &str| v.pointer(p).and_then(serde_json::Value::as_f64);
         let u = |p: &str| v.pointer(p).and_then(serde_json::Value::as_u64);
         Some(Quality {
@@ -78,7 +266,7 @@ impl Quality {
     }
 
     /// The quality keys of a texatlas report (`proto/report.schema.json`).
-    pub fn from_report(v: &serde_json::Value) -> Option<Quality> {
+    fn from_report(v: &serde_json::Value) -> Option<Quality> {
         let f = |p: &str| v.pointer(p).and_then(serde_json::Value::as_f64);
         let u = |p: &str| v.pointer(p).and_then(serde_json::Value::as_u64);
         Some(Quality {
@@ -94,27 +282,27 @@ impl Quality {
 
 /// What to run.
 #[derive(Debug, Clone)]
-pub struct BenchConfig {
-    /// The `texatlas` executable (the child runs `bench pipeline-child`).
-    pub exe: PathBuf,
+struct BenchConfig {
+    /// This bench's executable (the child runs its `child` subcommand).
+    exe: PathBuf,
     /// Directory of `atlas_eval.py`, `peer_xatlas.py`, `peer_uvunwrap.py`.
-    pub eval_dir: PathBuf,
+    eval_dir: PathBuf,
     /// Run the peers (implies `eval`).
-    pub peers: bool,
+    peers: bool,
     /// Measure every output with the evaluator.
-    pub eval: bool,
+    eval: bool,
     /// Page side, texels.
-    pub resolution: u32,
+    resolution: u32,
     /// Padding, texels.
-    pub padding: u32,
+    padding: u32,
     /// A peer still running after this long is stopped and reported as such.
-    pub peer_timeout: Duration,
+    peer_timeout: Duration,
     /// Where outputs go.
-    pub work_dir: PathBuf,
+    work_dir: PathBuf,
 }
 
 /// Every corpus `.glb` in `dir`, sorted.
-pub fn corpus_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+fn corpus_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("reading the corpus directory {}", dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -125,7 +313,7 @@ pub fn corpus_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
 }
 
 /// Runs every tool on every file; `on_row` sees each row as it is measured.
-pub fn run_bench(
+fn run_bench(
     files: &[PathBuf],
     config: &BenchConfig,
     mut on_row: impl FnMut(&PipelineRow),
@@ -175,7 +363,7 @@ pub fn run_bench(
 
 fn run_ours(file: &Path, out: &Path, config: &BenchConfig) -> PipelineRow {
     let result = Command::new(&config.exe)
-        .args(["bench", "pipeline-child", "--input"])
+        .args(["child", "--input"])
         .arg(file)
         .arg("--output")
         .arg(out)
@@ -287,7 +475,7 @@ fn run_eval(out: &Path, config: &BenchConfig) -> anyhow::Result<Quality> {
 }
 
 /// The table: one line per tool and file, then the time ratios per file.
-pub fn format_table(rows: &[PipelineRow]) -> String {
+fn format_table(rows: &[PipelineRow]) -> String {
     use std::fmt::Write as _;
     let mut s = String::new();
     let _ = writeln!(
@@ -374,4 +562,63 @@ pub fn format_table(rows: &[PipelineRow]) -> String {
         }
     }
     s
+}
+
+/// Run by `cargo test` (this target has `test = true`, `harness = false`).
+#[cfg(test)]
+mod self_tests {
+    use super::*;
+
+    pub const TESTS: &[(&str, fn())] = &[
+        (
+            "unwraps_a_fixture_in_a_child_process_with_stage_times_and_quality",
+            unwraps_a_fixture_in_a_child_process_with_stage_times_and_quality,
+        ),
+        (
+            "a_file_that_fails_is_a_row_with_its_error",
+            a_file_that_fails_is_a_row_with_its_error,
+        ),
+    ];
+
+    fn unwraps_a_fixture_in_a_child_process_with_stage_times_and_quality() {
+        let fixture = common::fixture("Box.glb");
+        let cli = Cli::try_parse_from(["pipeline".as_ref(), fixture.as_os_str()]).expect("args");
+        assert!(cli.child.is_none() && !cli.args.peers && !cli.args.eval);
+        let rows = run(&cli.args, |_| {}).expect("bench");
+        assert_eq!(rows.len(), 1, "{rows:?}");
+        let row = &rows[0];
+        assert_eq!(
+            (row.file.as_str(), row.tool.as_str()),
+            ("Box.glb", "texatlas")
+        );
+        assert_eq!(row.error, None);
+        assert_eq!(row.triangles, 12);
+        let stages = row.stages_s.expect("stage times");
+        assert!(
+            stages.iter().all(|s| s.is_finite() && *s >= 0.0),
+            "{stages:?}"
+        );
+        assert!(row.total_s >= stages.iter().sum::<f64>() * 0.5, "{row:?}");
+        assert!(row.peak_mib > 0.0, "VmHWM read from the child");
+        let quality = row.report.expect("quality from our report");
+        assert!(quality.charts >= 1);
+        assert_eq!((quality.flipped, quality.overlaps), (0, 0));
+        assert!(row.eval.is_none(), "no evaluator without --eval");
+        let table = format_table(&rows);
+        assert!(table.contains("| Box.glb | texatlas | 12 |"), "{table}");
+    }
+
+    fn a_file_that_fails_is_a_row_with_its_error() {
+        let dir = tempfile::tempdir().expect("tmp");
+        let bad = dir.path().join("bad.glb");
+        std::fs::write(&bad, b"not a glb").expect("write");
+        let cli = Cli::try_parse_from(["pipeline".as_ref(), bad.as_os_str()]).expect("args");
+        let rows = run(&cli.args, |_| {}).expect("bench");
+        assert_eq!(rows.len(), 1);
+        assert_eq!(rows[0].file, "bad.glb");
+        assert!(
+            rows[0].error.as_deref().is_some_and(|e| !e.is_empty()),
+            "{rows:?}"
+        );
+    }
 }
