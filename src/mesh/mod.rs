@@ -67,6 +67,7 @@ mod geometry;
 mod ids;
 mod input;
 mod topology;
+pub(crate) mod vector;
 
 #[cfg(test)]
 mod tests;
