@@ -6,17 +6,17 @@
 //! - [`segment`]: `segment_charts` cuts a [`TriangleMesh`] into charts that are each a topological
 //!   disk (Lévy et al. 2002 §3.1–3.2), and `validate_charts` flattens them with [`parameterize`]
 //!   and splits those with flips, UV boundary crossings or too much area distortion (§3.3);
-//!   then, on small meshes with few charts that pack poorly, `cut_for_packing` (in this file)
-//!   cuts charts in two when that raises the packing efficiency (issue 5's 0.60 target; each cut
-//!   kept only for a measured gain). It runs at the start of the pack stage (its packing is the
-//!   stage's packing when no cut is kept), without a cancel checkpoint of its own (at most 5
-//!   validations and packings of a mesh of ≤ 20k faces);
 //! - [`parameterize`]: flattens one chart (LSCM, Lévy et al. 2002 §2; hierarchical LSCM, Ray &
 //!   Lévy 2003);
 //! - [`pack`]: places the flattened charts on texture pages at one texel density, with padding
 //!   (the horizon packer, Lévy et al. 2002 §4, from four directions with rotations, Zhou et al.
-//!   2004 §6);
-//! - [`measure`]: the quality report, with the definitions of the independent evaluator.
+//!   2004 §6); at its start, on small meshes with few charts that pack poorly, the
+//!   packing-aware cuts (`packing_cuts.rs`) cut charts in two when that raises the packing
+//!   efficiency; the packer's input is built in `pack_input.rs`, and charts made only of
+//!   degenerate faces get their UVs in `degenerate.rs`;
+//! - [`measure`]: the quality report, with its definitions.
+//!
+//! Errors: [`AtlasError`] (`error.rs`).
 //!
 //! Invariant: no IO, no serde, no wall-clock time, no logging; same input, same output bits
 //! whatever the thread count (`tests/architecture.rs` checks the `use` lines). Stage timings are

@@ -1,4 +1,8 @@
 //! Packing-aware cuts: a feedback loop from the pack stage into segmentation and validation.
+//!
+//! It runs at the start of the pack stage (its packing is the stage's packing when no cut is
+//! kept), without a cancel checkpoint of its own: it is bounded to a few validations and
+//! packings of a mesh of at most [`PACKING_CUT_MAX_FACES`] faces. Deterministic.
 
 use std::ops::ControlFlow;
 
@@ -10,9 +14,8 @@ use super::segment;
 use crate::mesh::TriangleMesh;
 
 /// `cut_for_packing` tries cuts only while the estimated packing efficiency is below this
-/// (issue 5's target for every mesh is 0.60; the estimate matched the measured packing to 0.001
-/// on the corpus meshes it ran on, so 0.01 is a margin). Not higher: spot packs at 0.619 uncut,
-/// and a threshold of 0.62 cut all its 21 charts (42 charts for 0.636, +0.5 s).
+/// (the packing target is 0.60, plus a margin for the estimate). Trade-off: a higher threshold
+/// cuts atlases that already pack well into many more charts for little gain.
 const PACKING_CUT_BELOW: f64 = 0.61;
 /// The last resort of `cut_for_packing` (every chart cut at once) runs only on atlases of at
 /// most this many charts: it doubles the seams, which pays on a tube of 4 strips, not on 20
@@ -22,8 +25,8 @@ const PACKING_CUT_ALL_MAX_CHARTS: usize = 8;
 /// average out and a cut would not pay for its re-validation and re-packing.
 const PACKING_CUT_MAX_CHARTS: usize = 32;
 /// ... and only on meshes of at most this many faces: the check alone packs the mesh once more,
-/// and each try validates and packs it again (measured on bunny, 69k faces and 28 charts: the
-/// check alone added ~0.2 s to a 1 s pipeline, for a packing already at 0.638).
+/// and each try validates and packs it again, which costs a large share of the pipeline on
+/// larger meshes, whose many charts pack well anyway.
 const PACKING_CUT_MAX_FACES: usize = 20_000;
 /// A cut is kept only when it raises the estimated efficiency by at least this (absolute):
 /// every seam costs texture continuity and gutter, so a marginal gain is not worth one.
@@ -31,7 +34,7 @@ const PACKING_CUT_MIN_GAIN: f64 = 0.02;
 /// At most this many tries (each a validation and a packing of the whole mesh).
 const PACKING_CUT_MAX_TRIES: usize = 4;
 
-/// Packing-aware cuts (issue 5: packing ≥ 0.60): when the atlas has few charts and packs
+/// Packing-aware cuts (packing target 0.60): when the atlas has few charts and packs
 /// poorly (a strip or a disc wastes most of a square page), the largest-area chart is cut in two
 /// from the ends of a diameter of its face graph (`segment::split_in_two`, then the disk
 /// guarantee), the mesh is validated again with the cut (no merge-back, so the halves stay
