@@ -1,11 +1,18 @@
 //! UVs for the charts that are not packed because all their faces are degenerate.
+//!
+//! A chart made only of faces with zero area or a repeated vertex covers nothing in 3-D, so it
+//! must cover nothing in UV: its corners take the UV (and page) of a vertex of a packed chart
+//! at the bit-identical position in the same glTF mesh (weld group), or the page origin when
+//! there is none. Its UV image is then a point or a segment: zero UV area, never a flip, never
+//! an overlap. Deterministic (sorted keys, ties to the lowest chart).
 
 use crate::mesh::{TriangleMesh, VertexId};
 
-/// UVs for the corners of degenerate charts (see [`generate`](super::generate)). Each degenerate face follows one
-/// packed chart: the lowest chart with a vertex at the position of its first matched corner;
-/// its other corners take that chart's vertex at their position when it has one, else the first
-/// corner's UV. A face with no match at all collapses to `[0, 0]` on page 0.
+/// UVs for the corners of degenerate charts (see [`generate`](super::generate)). Each
+/// degenerate face follows one packed chart: the lowest chart with a vertex at the position of
+/// its first matched corner; its other corners take that chart's vertex at their position when
+/// it has one, else the first corner's UV. A face with no match at all collapses to `[0, 0]` on
+/// page 0.
 pub(super) fn place_degenerate(
     mesh: &TriangleMesh,
     charts: &[Vec<crate::mesh::FaceId>],

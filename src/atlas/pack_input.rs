@@ -1,4 +1,6 @@
-//! The packer's input, built from the validated charts.
+//! The packer's input, built from the validated charts: per chart, its triangles in the
+//! numbering of its map, its 3-D area and whether it is degenerate. One builder, so that the
+//! packing-aware cuts and the pack stage pack the same charts.
 
 use super::error::AtlasError;
 use super::pack::PackChart;
