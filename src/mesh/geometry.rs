@@ -19,6 +19,7 @@
 //! [`face_normal`]: TriangleMesh::face_normal
 use super::ids::{CornerId, FaceId, HalfedgeId, VertexId};
 use super::topology::TriangleMesh;
+use super::vector::{cross, dot, norm, sub};
 
 /// A triangle is zero-area when `|e1 × e2| <= ZERO_AREA_RELATIVE_TOLERANCE * (longest edge)²`,
 /// i.e. its height is below `1e-12` times its longest edge. That is far above double rounding
@@ -39,27 +40,6 @@ impl Aabb {
     pub fn diagonal_m(&self) -> f64 {
         norm(sub(self.max_m, self.min_m))
     }
-}
-
-#[inline]
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-#[inline]
-pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-#[inline]
-pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-#[inline]
-pub(crate) fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
 }
 
 /// The two edge vectors from corner 0 of the triangle scaled by `1 / m`, where `m` is the largest

@@ -68,6 +68,7 @@ mod geometry;
 mod ids;
 mod input;
 mod topology;
+pub(crate) mod vector;
 
 #[cfg(test)]
 mod tests;

@@ -1,8 +1,10 @@
 //! Per-face geometry of the measured atlas: 3-D and signed UV areas, degeneracy, edge lengths.
 //!
-//! Formulas and operation order follow the evaluator (`atlas_eval.py`, `atlas_metrics`), so that
-//! threshold decisions (degeneracy) come out the same bit for bit on the same `f64` inputs.
+//! Formulas and operation order are fixed (see the module doc of [`super`] for the definitions),
+//! so that threshold decisions (degeneracy) come out the same bit for bit on the same `f64`
+//! inputs as in an independent implementation of the same definitions.
 //! Units: `_m`, `_m2` in model units, UV areas in page units². Cost: one pass, 50 bytes per face.
+use crate::mesh::vector::{cross, norm, sub};
 use crate::mesh::{FaceId, TriangleMesh};
 
 /// The evaluator's relative degeneracy tolerance: `|A| <= 1e-12 · (longest edge)²`.
@@ -20,18 +22,6 @@ pub(super) struct FaceGeometry {
     pub degenerate_3d: Vec<bool>,
     /// 3-D length of the half-edges corner 0→1, 1→2, 2→0.
     pub edge_len_m: Vec<[f64; 3]>,
-}
-
-pub(super) fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-pub(super) fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-pub(super) fn norm3(a: [f64; 3]) -> f64 {
-    dot3(a, a).sqrt()
 }
 
 /// numpy's `maximum`: NaN wins.
@@ -66,16 +56,11 @@ pub(super) fn face_geometry(mesh: &TriangleMesh, corner_uvs: &[[[f32; 2]; 3]]) -
     };
     for (f, uv) in corner_uvs.iter().enumerate() {
         let p = mesh.face_positions(FaceId(f as u32));
-        let e1 = sub3(p[1], p[0]);
-        let e2 = sub3(p[2], p[0]);
-        let e3 = sub3(p[2], p[1]);
-        let cross = [
-            e1[1] * e2[2] - e1[2] * e2[1],
-            e1[2] * e2[0] - e1[0] * e2[2],
-            e1[0] * e2[1] - e1[1] * e2[0],
-        ];
-        let a3 = 0.5 * norm3(cross);
-        let (l1, l2, l3) = (norm3(e1), norm3(e2), norm3(e3));
+        let e1 = sub(p[1], p[0]);
+        let e2 = sub(p[2], p[0]);
+        let e3 = sub(p[2], p[1]);
+        let a3 = 0.5 * norm(cross(e1, e2));
+        let (l1, l2, l3) = (norm(e1), norm(e2), norm(e3));
         let lmax3 = nan_max(nan_max(l1, l2), l3);
         let [s0, t0] = uv64(uv[0]);
         let [s1, t1] = uv64(uv[1]);

@@ -1,41 +1,92 @@
-//! Measuring an atlas: the quality report (issue 5).
+//! Measuring an atlas: the quality report.
 //!
 //! # Purpose
 //! [`measure_atlas`] turns the *final* data of an atlas — each face's 3-D corner positions, the
 //! `f32` corner UVs exactly as written to the file, the glTF mesh of each face and its page —
 //! into an [`AtlasReport`]: stretch, angle and area distortion, charts and seams, flips,
-//! overlaps (exact and sampled), packing, padding, range and texel density.
+//! overlaps (exact and sampled), packing, padding, range and texel density. It never trusts
+//! pipeline-internal chart ids: every figure is computed from the output alone, by the
+//! definitions below. `tests/measure_eval_agreement.rs` checks them against an independent
+//! implementation (the reason for the numpy-exact arithmetic of `numpy.rs`).
 //!
-//! The report measures the output the way the independent evaluator
-//! (`../shared/eval/atlas_eval.py`, its module docstring) does, with the same definitions, so
-//! that the two agree; it never trusts pipeline-internal chart ids. In particular a *chart* is
-//! recomputed from the output: a connected component of triangles, two triangles being connected
-//! when they share an edge whose two corners are equal in glTF mesh
-//! ([`TriangleMesh::vertex_weld_group`]), 3-D position and UV (exact equality, `-0.0 == 0.0`).
-//! Where we extend the evaluator (pages, `W × H` pages, exact overlaps, per-chart stretch) the
-//! extension reduces to the evaluator's definition for one square page `R = W = H`, which is how
-//! the agreement test (`tests/measure_eval_agreement.rs`) compares them.
+//! # Definitions
+//! Per face `T`: 3-D corners `q1, q2, q3` and UVs `(s_i, t_i)` (the `f32` values widened to
+//! `f64`, exact). Sums marked Σ are numpy's pairwise sums (`numpy.rs`) unless said otherwise.
 //!
-//! # Definitions (T a triangle, q1..q3 its positions, (s_i, t_i) its UVs)
-//! - `A3 = |(q2-q1) × (q3-q1)| / 2`, `A2 = ((s2-s1)(t3-t1) - (s3-s1)(t2-t1)) / 2` (signed).
-//! - UV-degenerate: `|A2| <= 1e-12 · (longest UV edge)²` (or NaN); 3-D degenerate: the same rule
-//!   on `A3`. A triangle is *used* for stretch, angle, area and density when neither.
-//! - Stretch (Sander et al. 2001, "Texture mapping progressive meshes" §3): `Ss = ∂q/∂s`,
-//!   `St = ∂q/∂t`, `a = Ss·Ss`, `b = Ss·St`, `c = St·St`, all scaled by the *global*
-//!   `k = Σ|A2| / ΣA3` over used triangles (the whole atlas is rescaled so that UV area = 3-D
-//!   area; per-chart values use the same `k`, so a chart at a different texel density has
-//!   L2 ≠ 1). Γ, γ = max and min singular values. `l2 = sqrt(Σ (a+c)/2·A3 / Σ A3)`,
-//!   `linf = max max(Γ, 1/γ)` (the symmetric form of Iso-charts, Zhou et al. 2004 §4),
-//!   `linf_sander = max Γ`.
-//! - Angle distortion: `|angle(Ss, St) - 90°|` and the conformal ratio Γ/γ; area distortion
-//!   `(|A2|/A3)/k`. Unweighted percentiles use numpy's linear interpolation, 3-D-area-weighted
-//!   (`_aw`) ones the inverted weighted CDF.
-//! - Orientation: a chart's orientation is the sign of its total signed UV area (ties positive);
-//!   `flipped` counts non-UV-degenerate triangles of the other sign.
-//! - Raster metrics sample texel centres on each `W × H` page with UVs snapped to `1/256` texel
-//!   fixed point and exact `i64` edge functions with a top-left tie rule (see `raster.rs`).
-//! - Exact overlaps: pairs of triangles on the same page whose open UV interiors intersect,
-//!   decided with Shewchuk's exact orientation predicate (see `overlap.rs`).
+//! - **Areas.** `e1 = q2 - q1`, `e2 = q3 - q1`; `A3 = |e1 × e2| / 2`. With `ds1 = s2 - s1`,
+//!   `dt1 = t2 - t1`, `ds2 = s3 - s1`, `dt2 = t3 - t1`: `A2 = (ds1·dt2 - ds2·dt1) / 2`
+//!   (signed, page units²).
+//! - **Degenerate.** UV-degenerate unless `|A2| > 1e-12 · ℓ2²`, `ℓ2` the longest UV edge (a NaN
+//!   anywhere makes the face degenerate); 3-D degenerate unless `A3 > 1e-12 · ℓ3²`, `ℓ3` the
+//!   longest 3-D edge. A face is *used* (for stretch, angle, area distortion and density) when
+//!   it is neither. `area_3d_m2` = Σ `A3` over the non-3-D-degenerate faces; `uv_area` = Σ `|A2|`
+//!   over the non-UV-degenerate faces, all pages.
+//! - **Normalisation.** `k = Σ|A2| / ΣA3` over the used faces (UV units² per model unit²): the
+//!   whole atlas is rescaled so that its UV area equals its 3-D area, so that 1.0 means
+//!   isometric whatever the texel density. Per-chart values use the same global `k`.
+//! - **Stretch** (Sander, Snyder, Gortler, Hoppe 2001, "Texture mapping progressive meshes" §3).
+//!   Per used face, the Jacobian of the affine map from texture to surface has the columns
+//!   `Ss = ∂q/∂s = (e1·dt2 - e2·dt1) / (2 A2)` and `St = ∂q/∂t = (e2·ds1 - e1·ds2) / (2 A2)`.
+//!   Its metric tensor, normalised: `a = k Ss·Ss`, `b = k Ss·St`, `c = k St·St` (dot products in
+//!   numpy's `einsum` order). Its singular values: `Γ = sqrt(((a + c) + r) / 2)`,
+//!   `γ = sqrt(max(0, ((a + c) - r) / 2))`, `r = sqrt((a - c)² + 4b²)`.
+//!   - `stretch.l2` = `sqrt(Σ ((a + c)/2 · A3) / Σ A3)` over the used faces: the area-weighted
+//!     RMS of the singular values, 1.0 for an isometry up to the global scale;
+//!   - `stretch.linf` = the largest `max(Γ, 1/γ)` over the used faces (`1/γ = ∞` when
+//!     `γ = 0`), the symmetric L∞ of Iso-charts (Zhou et al. 2004 §4); `stretch.linf_sander` =
+//!     the largest `Γ`, Sander's L∞. Both are 1.0 for an isometry.
+//!   - Per chart, `l2` and `linf` are the same over the chart's used faces (plain sequential
+//!     sums), with the global `k`, so a chart at another texel density than the rest has
+//!     `l2 ≠ 1`. A non-finite value is reported as `None`.
+//! - **Angle distortion**, per used face: the deviation `|acos(clamp(b / sqrt(a·c), -1, 1)) -
+//!   90°|` (90° when that is NaN) and the conformal ratio `Γ/γ` (`∞` when `γ = 0`).
+//! - **Area distortion**, per used face: `(|A2| / A3) / k` (1 where the face keeps its share of
+//!   the area).
+//! - **Means and percentiles** of these per-face values. Unweighted mean: Σx / n. Area-weighted
+//!   (`_aw`, weight `A3`): Σ(x·A3) / ΣA3. The means of `Γ/γ` leave out its infinite values; the
+//!   percentiles keep them. Unweighted percentile `p`: numpy's linear method on the sorted
+//!   values, virtual index `h = n·p/100 + (1 - p/100) - 1`, interpolated between the values at
+//!   `⌊h⌋` and `⌊h⌋ + 1` (clamped to the ends). Area-weighted percentile `p`: the inverted CDF,
+//!   the first value in the stable ascending order at which the sequential cumulative weight
+//!   reaches `p/100 · ΣA3`. Reported: deviation mean, p95 and their `_aw` forms; `Γ/γ` mean, p95
+//!   and their `_aw` forms; area ratio p5, p50, p95 and their `_aw` forms.
+//! - **Charts** are recomputed from the output: a corner's key is (glTF mesh
+//!   ([`TriangleMesh::vertex_weld_group`]), 3-D position, page, UV), exact bits with
+//!   `-0.0 == 0.0`; two faces are connected when they have a half-edge with the same unordered
+//!   pair of corner keys; charts are the connected components, numbered by lowest face. Seams
+//!   and boundaries: see `charts.rs`; `seam_edge_ratio` = seam length / `sqrt(area_3d_m2)`,
+//!   `boundary_edge_ratio` = chart-boundary half-edge length / `sqrt(area_3d_m2)`.
+//! - **Flips.** A chart's orientation is the sign of the sequential sum of `A2` over its
+//!   non-UV-degenerate faces (positive when ≥ 0). `flipped` counts the non-UV-degenerate faces
+//!   whose `A2 > 0` differs from their chart's orientation. The atlas's orientation is positive
+//!   when Σ of the positive charts' sums ≥ −Σ of the negative charts' sums;
+//!   `charts_minority_orientation` counts the charts of the other orientation (mirrored charts,
+//!   not flips).
+//! - **Exact overlaps.** Unordered pairs of faces on the same page whose *open* UV triangles
+//!   intersect: two triangles with interiors intersect iff no edge line of either (made
+//!   counter-clockwise) has all of the other on or right of it, decided with Shewchuk's exact
+//!   `orient2d` (`overlap.rs`). Faces of exactly zero UV area or with non-finite UVs have no
+//!   interior and never overlap; faces sharing an edge or a vertex overlap only when one folds
+//!   over the other. Split into same-chart (fold-overs) and cross-chart pairs.
+//! - **Sampled overlaps and coverage.** On each `W × H` page, texel `(i, j)` is sampled at its
+//!   centre only; UVs are snapped to `1/256` texel fixed point and covered centres decided with
+//!   exact integer edge functions and a top-left tie rule, so faces sharing an edge never both
+//!   cover a centre (`raster.rs`). `covered_texels`: centres covered by at least one face;
+//!   `overlapping_texels`: by at least two; `fraction` = overlapping / covered; `pairs`: distinct
+//!   face pairs covering a common centre (capped at [`SAMPLED_PAIR_CANDIDATES_MAX`] candidates).
+//! - **Padding.** A covered texel of chart `c` violates when a texel of another chart lies
+//!   within Chebyshev distance ≤ `padding_texels` on the same page (texels covered by several
+//!   charts count under overlap only).
+//! - **Packing efficiency** = `uv_area / num_pages` (a page is the unit square, so this is the
+//!   share of the page area covered; overlaps count twice); `packing_efficiency_bbox` =
+//!   `uv_area / (num_pages · area of uv_bbox)`, `uv_bbox` the box of the corners of the faces
+//!   whose UVs are all finite, all pages overlaid.
+//! - **Texel utilisation** = `covered_texels / (num_pages · W · H)`.
+//! - **Range.** A corner is out of range when `u` or `v` is outside `[-1e-6, 1 + 1e-6]` or NaN.
+//! - **Texel density.** Per chart with used area, `d = sqrt(Σ|A2| / ΣA3)` over its used faces
+//!   (UV units per model unit); reported: min, max, max/min, `cv` = population standard
+//!   deviation / mean, `cv_aw` the same with weights `ΣA3` per chart, and the atlas's
+//!   `texels_per_unit` = `sqrt(k · W · H)`.
 //!
 //! # Invariants
 //! Pure and deterministic: the same input gives the same report bits whatever the thread count
@@ -44,31 +95,23 @@
 //! # Units
 //! 3-D lengths in model units (`_m`), areas `_m2`; UV lengths and areas in normalized page units
 //! (a page is the unit square); raster quantities in texels (`_texels`); angles in the report in
-//! degrees (`_deg`, as the evaluator); stretch and ratios are dimensionless (1 ideal).
+//! degrees (`_deg`); stretch and ratios are dimensionless (1 ideal).
 //!
 //! # Cost
 //! Linear in faces plus linear in page texels: one pass per face for geometry and stretch,
 //! bucket sorts (no comparison sort over all corners) for connectivity, one rasterisation pass
 //! per page (plus a second only when texels are covered twice), a separable `O(W·H·padding)`
 //! padding scan, and a uniform grid for exact overlaps (about 3 candidate pairs per face on
-//! a well-packed atlas). Measured with `cargo test --release --test measure_eval_agreement
-//! measure_speed` (process CPU time, all threads; the shared 2-core machine ran at load ~10, so
-//! wall time was about 3× this): bunny (69k faces) at 1024²: 60 ms; a 1M-face grid: 0.8 s at
-//! 1024², 1.15 s at 4096²; the 1M-face `beast_sub2_1M` with one chart per face: 1.2 s; the same
-//! with a closed surface folded flat (8.2M true overlap pairs, each needing all 18 predicates):
-//! 5.6 s. Memory about 100 bytes per face plus 5 bytes per page texel, plus 8 bytes per exact
-//! overlap pair found (none on a correct atlas; at most [`EXACT_OVERLAP_PAIRS_MAX`]).
-//! The exact-overlap search runs concurrently with everything else (it needs no chart ids;
-//! its pairs are classified by chart at the end). Instructions per measure of bunny under callgrind
-//! (one thread), before → after the branch-free padding scan, the radix percentile sorts and
-//! the counting-sorted half-edges (same report bits): raster 321M → 191M, stretch 124M → 88M,
-//! exact overlaps 125M → 132M (the pairs are now stored).
+//! a well-packed atlas). Memory about 100 bytes per face plus 5 bytes per page texel, plus 8
+//! bytes per exact overlap pair found (none on a correct atlas; at most
+//! [`EXACT_OVERLAP_PAIRS_MAX`]). The exact-overlap search runs concurrently with everything
+//! else (it needs no chart ids; its pairs are classified by chart at the end).
 //!
 //! # Code map
 //! - `geometry.rs`: per-face areas, degeneracy, edge lengths.
 //! - `charts.rs`: corner keys, charts, seams, boundaries.
 //! - `stretch.rs`: stretch, angle and area distortion, texel density.
-//! - `numpy.rs`: the evaluator's numerics (pairwise sums, einsum order, percentiles).
+//! - `numpy.rs`: numpy-exact numerics (pairwise sums, einsum order, percentiles).
 //! - `raster.rs`: centre-sampled coverage, sampled overlap, padding violations.
 //! - `overlap.rs`: exact overlap pairs on a uniform grid.
 use crate::mesh::{FaceId, TriangleMesh};

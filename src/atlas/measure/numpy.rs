@@ -1,7 +1,7 @@
-//! The evaluator's numerics, reproduced operation for operation so that our figures agree with
-//! `atlas_eval.py` to the last bits where the inputs are the same: numpy's pairwise summation,
-//! its `einsum` dot-product order, its linear-interpolation percentile and the evaluator's
-//! inverted-CDF weighted percentile.
+//! numpy's numerics, reproduced operation for operation so that our figures agree with the
+//! independent evaluator (a numpy program) to the last bits where the inputs are the same:
+//! numpy's pairwise summation, its `einsum` dot-product order, its linear-interpolation
+//! percentile and the evaluator's inverted-CDF weighted percentile.
 //!
 //! Why: most figures would agree to ~1e-15 with any accurate summation, but a few decisions
 //! hinge on rounding — the sign of a chart's signed UV area when a closed surface is projected

@@ -1,6 +1,7 @@
 //! Centre-sampled rasterisation of each page: coverage, sampled overlap, padding violations.
 //!
-//! This is the evaluator's raster (`atlas_eval.py`, `_rasterize`), extended to `W × H` pages:
+//! The raster of the module doc's definitions (the independent evaluator's, extended to `W × H`
+//! pages):
 //! - texel `(i, j)` of a page covers `[i/W, (i+1)/W] × [j/H, (j+1)/H]` and is sampled only at
 //!   its centre;
 //! - UVs are snapped to a fixed-point grid of `1/S` texel, `S = 256` (halved while

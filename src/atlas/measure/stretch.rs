@@ -10,12 +10,13 @@
 //!
 //! Units: stretch and ratios dimensionless; angles in degrees (`_deg`, as the evaluator).
 //! Cost: one pass over the faces plus three sorts of the used faces' values (percentiles).
-use super::geometry::{sub3, uv64, FaceGeometry};
+use super::geometry::{uv64, FaceGeometry};
 use super::numpy::{
     dot3_einsum, np_mean, np_mean_weighted, np_sum, percentile_linear, percentile_weighted,
     stable_order,
 };
 use super::{finite, AngleDistortion, AreaDistortion, StretchReport, TexelDensityReport};
+use crate::mesh::vector::sub;
 use crate::mesh::{FaceId, TriangleMesh};
 
 /// Per-chart stretch figures (global `k`).
@@ -94,8 +95,8 @@ pub(super) fn stretch(
     let mut chart_linf = vec![f64::NEG_INFINITY; num_charts];
     for f in (0..nf).filter(|&f| used[f]) {
         let p = mesh.face_positions(FaceId(f as u32));
-        let e1 = sub3(p[1], p[0]);
-        let e2 = sub3(p[2], p[0]);
+        let e1 = sub(p[1], p[0]);
+        let e2 = sub(p[2], p[0]);
         let uv = &corner_uvs[f];
         let [s0, t0] = uv64(uv[0]);
         let [s1, t1] = uv64(uv[1]);

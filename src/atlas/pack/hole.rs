@@ -47,20 +47,12 @@
 //! (fewer: only the words between the first and last position still possible are worked on,
 //! and the row stops when none is left), for the rows down to its first fit and
 //! [`CANDIDATE_ROWS`] more; per candidate O(ring runs × run length / 64); per commit,
-//! O(runs of `F` × free runs of the rows it covers + texels of `F` / 64). Measured on
-//! 2CylinderEngine (1,174 packed charts, 1024², one run, load 3.7): the leapfrog search of
-//! before (a binary search per step, given up past 1024 steps per chart row) packed 0.525 in
-//! a 11.1 s pack stage; the exhaustive first fit over the whole page with the padded-box
-//! order of `super::pack_charts`: 0.562 in 9.1 s (0.581 once small charts tried every angle).
-//! Orientations in parallel (2 threads, one run each, same GLB): pack stage 9.97 s → 6.57 s.
-//! The contact score (2 threads, one run each, machine loaded by another build, 16 angles):
-//! exact runs of `D` alone 0.5812; score at each orientation's first fit only 0.586–0.589;
-//! every run end on the rows within 4 / 16 / 32 / 64 of `E`, contact alone 0.589 / 0.594 /
-//! 0.594 / 0.593; contact as a fraction of the ring 0.591–0.595; `2 · contact − rows` 0.5966,
-//! `contact − 2 · rows` 0.5935; with the 24 angles of [`super::hole_rotations`] 0.6018 (pack
-//! stage in the module doc of `super`).
-use super::horizon::Placement;
+//! O(runs of `F` × free runs of the rows it covers + texels of `F` / 64). Trade-off: the
+//! exhaustive search costs more than a first fit by bisection, but finds fits a bisection
+//! misses; the contact score (`2 · contact − rows below the highest first fit`) packs tighter
+//! than the first fit alone for the price of scoring the candidates near it.
 use super::place::{Orientation, EMPTY};
+use super::placement::Placement;
 
 /// The free space of one canvas row: the occupied span and the free runs inside it.
 #[derive(Debug, Clone, Default)]
@@ -282,7 +274,7 @@ impl Occupancy {
             })
             .collect();
         let first_end = found.iter().map(|f| f.0).min()?;
-        // Score: 2 · contact − rows below the highest first fit (measured, module doc).
+        // Score: 2 · contact − rows below the highest first fit (see the module doc).
         let score = |c: &(i32, i32, usize, i64)| 2 * c.3 - i64::from(c.0 - first_end);
         let best = found
             .iter()
@@ -478,8 +470,8 @@ impl Occupancy {
 }
 
 /// How many canvas rows below the highest first fit ([`Occupancy::find`]) candidates are
-/// still scored. Measured on 2CylinderEngine (module doc): 4 → 0.589, 16 → 0.594, 32 → 0.594,
-/// 64 → 0.593 (16 angles, contact alone).
+/// still scored. Trade-off: fewer rows miss better-touching positions, more rows cost time
+/// without packing tighter.
 pub const CANDIDATE_ROWS: i32 = 16;
 
 /// The rows of `D` as runs `(row, first, last)`, row by row, left to right (exact: the

@@ -21,8 +21,7 @@
 //! `x`: deterministic). Directions: isocharts-2004 §6 picks a pair from the aspect ratio
 //! (with the current box `W_curr × H_curr`, left/right if `H_curr · W / H > W_curr`, else
 //! top/bottom) and lets its two members compete on waste. Here all four sides compete and the
-//! aspect rule only orders them (which decides ties): measured on the bunny (75 charts, 1024²,
-//! padding 2, 16 rotations) this raised the efficiency from 0.624 to 0.650 for twice the search.
+//! aspect rule only orders them (which decides ties): a tighter packing for twice the search.
 //! The page bound keeps the box within `W × H` either way.
 //!
 //! On a page made by [`HorizonPage::with_holes`], [`HorizonPage::find`] asks the page's
@@ -49,18 +48,7 @@
 //! sides run in parallel (rayon) above `PARALLEL_WORK`, deterministically.
 use super::hole::Occupancy;
 use super::place::{Orientation, EMPTY};
-
-/// A chosen position: orientation index and the canvas position of the orientation's grid
-/// origin (top-left of `D`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Placement {
-    /// Index into the chart's orientations.
-    pub orientation: usize,
-    /// Canvas column of the grid origin.
-    pub x: i32,
-    /// Canvas row of the grid origin.
-    pub y: i32,
-}
+use super::placement::Placement;
 
 /// One page being packed.
 #[derive(Debug, Clone)]
@@ -167,8 +155,8 @@ impl HorizonPage {
             });
         };
         let widen = i64::from(y1 - y0) * i64::from(bw) > i64::from(x1 - x0) * i64::from(bh);
-        // All four sides compete on waste (measured: bunny 0.624 → 0.650 against the pair of
-        // isocharts-2004 alone); the aspect rule orders them, which decides ties.
+        // All four sides compete on waste (tighter than the pair of isocharts-2004 alone); the
+        // aspect rule orders them, which decides ties.
         let sides = if widen {
             [Side::PlusX, Side::MinusX, Side::PlusY, Side::MinusY]
         } else {
@@ -511,9 +499,8 @@ impl HorizonPage {
 }
 
 /// Runs of a chart's lines whose most protruding line joins the key lines of
-/// [`HorizonPage::prepare`]. Measured (one thread, load ~5, evaluations of positions past the
-/// key-line bound): bunny 1.98 M → 0.25 M, armadillo 2.98 M → 0.35 M (8 runs: 0.06 M each, but
-/// the bound costs more than it saves); the same placements.
+/// [`HorizonPage::prepare`]. Trade-off: more key lines reject more positions by the bound, but
+/// the bound itself costs more; the placements are the same either way.
 const KEY_SEGMENTS: usize = 4;
 
 /// Profile of the chart's lines that are empty (never constrain `t`).

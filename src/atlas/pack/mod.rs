@@ -1,47 +1,46 @@
-//! Packing: place flattened charts on texture pages (issue 5).
+//! Packing: place flattened charts on texture pages.
 //!
 //! Purpose: the third stage of the atlas pipeline. [`pack_charts`] scales every chart to one
 //! texel density, turns it, and places it with the horizon ("Tetris") packer of lscm-2002 §4,
 //! extended as isocharts-2004 §6 (insertion from four directions, 16 rotations), then writes
-//! normalized page UVs. On top of the papers' packers, where the horizons leave much of the
-//! page empty (fit-to-page efficiency below [`HOLE_FILL_BELOW`], or a fixed density needing
-//! more than one page), the charts are packed again with *hole filling* ([`hole`]) and the
+//! normalized page UVs. Where the horizons leave much of the page empty (fit-to-page
+//! efficiency below [`HOLE_FILL_BELOW`], or a fixed density needing more than one page), the
+//! charts are packed again with *hole filling* ([`hole`], an extension of the papers) and the
 //! better packing is kept: in the order of `padded_box_order` (largest padded UV box first),
 //! each chart goes to a position of the page where its padded footprint meets no placed
 //! footprint (exact occupancy of every placed chart, an exhaustive bit-parallel search), near
-//! the top and touching placed charts most (the contact score of [`hole`], with the 24 angles
-//! of [`hole_rotations`]; the plain first fit below [`HOLE_SCORED_MIN_CHARTS`] charts).
-//! Measured (1024², padding 2, 16 rotations asked): 2CylinderEngine 0.314 by the horizons →
-//! 0.581 by the first fit → 0.602 by the contact score (pack stage in
-//! [`HOLE_SCORED_MIN_CHARTS`]); meshes that pack at 0.60 or more are packed by the horizons
-//! alone, as before.
+//! the top and touching placed charts most (the contact score of [`hole`], with the angles of
+//! [`hole_rotations`]; the plain first fit below [`HOLE_SCORED_MIN_CHARTS`] charts).
 //!
-//! **Stage contract (GUIDE.md).** Charts never overlap, keep `padding_texels` empty texels
-//! between each other and from the page edge, and stay inside \[0,1\]². Exactly: the
-//! footprints (every texel whose centre lies in a triangle grown by
-//! [`place::CENTRE_GROW_TEXELS`], a superset of the texel-centre sampled coverage of the
-//! independent evaluator `../shared/eval/atlas_eval.py`, also after `f32` rounding) of two
-//! charts on a page are at Chebyshev distance `> padding_texels`, and every footprint texel is
-//! at least `padding_texels` from the page edge ("padding.violation_texels" = 0). Charts too
-//! small to cover a texel centre use their conservative footprint (every texel touched); the
-//! touched texels of thin parts (slivers, spikes) away from the sampled footprint are added to
-//! it (see `place::orientation`), so that no two charts' triangles overlap exactly either. The
-//! whole chart stays inside its grid, which stays on the page (UVs in \[0,1\]).
-//! Every chart has the same density: placed UV area = `area_m2 × texels_per_unit²` texels².
-//! Deterministic: integer horizons, fixed orders, ties by index, no hash maps; the parallel
-//! parts (footprints of a batch of charts, the sides of a horizon search, the orientations of a
-//! hole search) are reduced in a fixed order, and a trial of the density search packed ahead
-//! is used only when the search asks for exactly its density, so the result does not depend on
-//! the thread count.
+//! Stage contract. Charts never overlap, keep `padding_texels` empty texels between each other
+//! and from the page edge, and stay inside \[0,1\]². Exactly: the footprints of two charts on
+//! a page (every texel whose centre lies in a triangle grown by [`place::CENTRE_GROW_TEXELS`],
+//! a superset of the texel-centre sampled coverage that [`crate::atlas::measure`] checks, also
+//! after `f32` rounding) are at Chebyshev distance `> padding_texels`, and every footprint
+//! texel is at least `padding_texels` from the page edge (the report's
+//! `padding.violation_texels` is 0). Charts too small to cover a texel centre use their
+//! conservative footprint (every texel touched); the touched texels of thin parts (slivers,
+//! spikes) away from the sampled footprint are added to it (see `place::orientation`), so that
+//! no two charts' triangles overlap exactly either. The whole chart stays inside its grid,
+//! which stays on the page (UVs in \[0,1\]). Every chart has the same density: placed UV area
+//! = `area_m2 × texels_per_unit²` texels².
+//!
+//! Invariant: deterministic. Integer horizons, fixed orders, ties by index, no hash maps; the
+//! parallel parts (footprints of a batch of charts, the sides of a horizon search, the
+//! orientations of a hole search) are reduced in a fixed order, and a trial of the density
+//! search packed ahead is used only when the search asks for exactly its density, so the
+//! result does not depend on the thread count.
 //!
 //! Units: chart UVs come in model units (as the parameterizer returns them); placed UVs are
 //! normalized page coordinates in \[0,1\]² (u right, v down, glTF convention); sizes on the page
 //! are in texels (`_texels`); densities in texels per model unit.
 //!
-//! Code map: [`raster`] (centre-sampled and conservative footprints, Chebyshev dilation),
-//! [`place`] (density, diameter orientation, rotations, outline triangles, per-line footprint
-//! extents, footprint bits), [`horizon`] (the four-direction horizon packer, one page),
-//! [`hole`] (the occupancy of a page and the search inside its box), this file (options, the
+//! Code map: `types.rs` (options, input chart, packing, errors), [`raster`] (centre-sampled and
+//! conservative footprints, Chebyshev dilation), [`place`] (density, diameter orientation,
+//! rotations, per-line footprint extents, footprint bits), `hull.rs` (convex hull and
+//! diameter), [`outline`] (boundary chain and outline triangles of a chart), [`horizon`] (the
+//! four-direction horizon packer, one page), [`hole`] (the occupancy of a page and the search
+//! inside its box), [`placement`] (the position both searches return), this file (the
 //! fit-to-page density search, output).
 //!
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
@@ -59,127 +58,12 @@ mod tests;
 
 use std::ops::ControlFlow;
 
-/// How big charts are on the page.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum TexelDensity {
-    /// The largest uniform density at which every chart fits on one page. The default.
-    FitToPage,
-    /// A fixed density in texels per model unit (`> 0`, finite); more pages open when the charts
-    /// do not fit on one.
-    TexelsPerUnit(f64),
-}
+mod hull;
+pub mod outline;
+pub mod placement;
+mod types;
 
-/// Options of [`pack_charts`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PackOptions {
-    /// Page width in texels, `>= 1`. Default 1024.
-    pub width_texels: u32,
-    /// Page height in texels, `>= 1`. Default 1024.
-    pub height_texels: u32,
-    /// Empty texels kept between any two charts and between a chart and the page edge. Default 2.
-    pub padding_texels: u32,
-    /// Texel density. Default [`TexelDensity::FitToPage`].
-    pub density: TexelDensity,
-    /// Rotations tried per chart, evenly spaced over a full turn after orienting the chart's
-    /// maximum diameter vertically; `1` means the diameter-vertical orientation only. `>= 1`.
-    /// Default 16 (isocharts-2004 §6). Charts smaller than [`SMALL_CHART_TEXELS`] try at most
-    /// the 4 quarter turns when this is a multiple of 4, except when the charts are packed
-    /// again with hole filling ([`hole`]), where every chart tries [`hole_rotations`] (24 for
-    /// 16) when there are at least [`HOLE_SCORED_MIN_CHARTS`] charts.
-    pub rotations: u32,
-}
-
-impl Default for PackOptions {
-    fn default() -> Self {
-        Self {
-            width_texels: 1024,
-            height_texels: 1024,
-            padding_texels: 2,
-            density: TexelDensity::FitToPage,
-            rotations: 16,
-        }
-    }
-}
-
-/// One flattened chart to place.
-#[derive(Debug, Clone, Copy)]
-pub struct PackChart<'a> {
-    /// UV per chart vertex in model units (any similarity of the final shape).
-    pub uv: &'a [[f64; 2]],
-    /// Triangles as indices into `uv`.
-    pub triangles: &'a [[u32; 3]],
-    /// The chart's 3-D surface area, model units². With `uv` it fixes the chart's scale:
-    /// placed UV area = area_m2 × density² (in texels²).
-    pub area_m2: f64,
-}
-
-/// A placed chart.
-#[derive(Debug, Clone, PartialEq)]
-pub struct PlacedChart {
-    /// The page it is on, `0..Packing::num_pages`.
-    pub page: u32,
-    /// UV per chart vertex, normalized page coordinates in \[0,1\]².
-    pub uv: Vec<[f64; 2]>,
-}
-
-/// The result of [`pack_charts`].
-#[derive(Debug, Clone, PartialEq)]
-pub struct Packing {
-    /// One entry per input chart, same order.
-    pub charts: Vec<PlacedChart>,
-    /// Pages used (1 with [`TexelDensity::FitToPage`]).
-    pub num_pages: u32,
-    /// The density used, texels per model unit.
-    pub texels_per_unit: f64,
-    /// Packings run to find the density (1 with [`TexelDensity::TexelsPerUnit`]); a cost
-    /// diagnostic for reports and benchmarks.
-    pub trials: u32,
-}
-
-/// Errors of [`pack_charts`]; each says what to change.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum PackError {
-    /// An option has a meaningless value.
-    #[error("invalid packing option `{option}`: {detail}")]
-    InvalidOption {
-        /// The option's name, e.g. `padding_texels`.
-        option: &'static str,
-        /// What is wrong and what to use instead.
-        detail: String,
-    },
-    /// A chart cannot fit on a page even alone.
-    #[error("chart {chart} needs {needed_texels:?} texels (with padding) but a page has {page_texels:?}; lower texels_per_unit or raise the resolution")]
-    ChartTooLarge {
-        /// Index of the chart.
-        chart: usize,
-        /// Width and height it needs.
-        needed_texels: [u64; 2],
-        /// Page size.
-        page_texels: [u32; 2],
-    },
-    /// A chart's data is unusable.
-    #[error("chart {chart} cannot be packed: {detail}")]
-    InvalidChart {
-        /// Index of the chart.
-        chart: usize,
-        /// What is wrong and how to fix it.
-        detail: String,
-    },
-    /// With [`TexelDensity::FitToPage`]: even at a density where every chart is one texel, the
-    /// charts and their padding do not fit on one page.
-    #[error("{charts} charts with {padding_texels} texels of padding do not fit on one {page_texels:?} page at any density; raise the resolution, lower padding_texels, or use TexelsPerUnit (more pages)")]
-    DoesNotFit {
-        /// Number of charts to place.
-        charts: usize,
-        /// Page size.
-        page_texels: [u32; 2],
-        /// Padding asked for.
-        padding_texels: u32,
-    },
-    /// The monitor asked to stop.
-    #[error("packing was cancelled")]
-    Cancelled,
-}
+pub use types::{PackChart, PackError, PackOptions, Packing, PlacedChart, TexelDensity};
 
 /// Largest page side accepted, texels (`width_texels`, `height_texels`): bounds the memory of
 /// the horizons (O(side)) and of a footprint (at most one page of bits).
@@ -199,39 +83,25 @@ pub const FIT_TOLERANCE: f64 = 3e-3;
 /// not monotone in the density (a slightly larger density can fit where a smaller did not),
 /// so after the bracket closes, `lo · (1 + k · FIT_PROBE_STEP)` for `k = 1, 2, …` up to
 /// `FIT_PROBES` are packed too, upwards until the first that does not fit; the last that fits
-/// wins (never less than the bracket's own result).
-/// Measured (1024², padding 2, 16 rotations): bunny 0.638 → 0.651, spot 0.583 → 0.619,
-/// armadillo 0.638 → 0.651 (4 probes: spot 0.631, one more packing). Not used when the charts
-/// are packed again with hole filling: there, on 2CylinderEngine, every probe failed with 4, 8
-/// and 16 angles for the small charts (one run each) while costing 3 of its 10 packings.
-/// Measured again after later packer changes (one run each): none of the 51 probes of the 17
-/// smaller corpus files fitted (3 of the 11 packings of bunny and armadillo, ~25 % of their
-/// pack stage), but on the 1M-triangle `beast_sub2_1M` they still raise the packing 0.636 →
-/// 0.649, so they stay. There the first probe fitted and the second and third did not, so
-/// probing stops at the first failure: the same packing on beast and on the 17 smaller files
-/// (their GLBs byte-identical), for one probe instead of three where the first fails (bunny and
-/// armadillo 11 → 9 packings, pack stage about −15 %, one run each).
+/// wins (never less than the bracket's own result). Not used when the charts are packed again
+/// with hole filling. Trade-off: each probe is one more full packing, for about +0.01 of
+/// packing efficiency on large meshes; stopping at the first failure keeps the cost at one
+/// packing where probes do not fit.
 pub const FIT_PROBES: usize = 3;
 
 /// Charts whose placed UV area is below this many texels² try only the quarter turns of the
 /// diameter-vertical orientation (when `rotations` is a multiple of 4): a subset of the
-/// angles, a quarter of the search. Such charts are a few texels across, where finer angles
-/// change little, and they can number thousands (2CylinderEngine: 2,332 packed charts; its
-/// pack stage measured 19.9 s → 5.3 s on one thread, packing 0.273 → 0.285). Not when the
-/// charts are packed again with hole filling ([`hole`]): there a small chart goes into a gap
-/// between placed charts, where the angle matters. Measured on 2CylinderEngine (1024², padding
-/// 2, 2 threads, one run each, the hole-filling packing kept): quarter turns 0.5615 (pack stage
-/// 7.3 s), 8 angles 0.5728 (11.8 s), all 16 angles 0.5808 (24.2 s with the probes of
-/// [`FIT_PROBES`], which all failed).
+/// angles, a quarter of the search. Not when the charts are packed again with hole filling
+/// ([`hole`]): there a small chart goes into a gap between placed charts, where the angle
+/// matters. Trade-off: such charts are a few texels across, where finer angles change the
+/// packing little, and they can number thousands, so the search is several times faster.
 pub const SMALL_CHART_TEXELS: f64 = 1024.0;
 
 /// The rotations tried by the packing with hole filling ([`hole`]) for `rotations` asked:
 /// half as many again (16 → 24) when `rotations` is a multiple of 8 (so that the quarter
 /// turns still share footprints) and that stays within [`MAX_ROTATIONS`]; otherwise
-/// `rotations`. Hole filling places each chart in a gap of the page, where more angles
-/// find more fits. Measured on 2CylinderEngine (1024², padding 2, the contact-scored search of
-/// [`hole`], 2 threads, one run each, machine loaded): 16 angles 0.5966, 20 → 0.5967, 24 →
-/// 0.6018, 28 → 0.6037, 32 → 0.6037 (pack stage ×1.6 against 24).
+/// `rotations`. Trade-off: hole filling places each chart in a gap of the page, where more
+/// angles find more fits, at a search cost proportional to the angles.
 pub fn hole_rotations(rotations: u32) -> u32 {
     let more = rotations + rotations / 2;
     if rotations % 8 == 0 && more <= MAX_ROTATIONS {
@@ -242,15 +112,10 @@ pub fn hole_rotations(rotations: u32) -> u32 {
 }
 
 /// Packings with hole filling of at least this many charts use the contact-scored search and
-/// [`hole_rotations`] ([`hole`]); fewer charts take the plain first fit with `rotations`, as
-/// before it. On the corpus, the scored search changed three meshes of 2–3 charts (Box,
-/// BoxInterleaved, SimpleSparseAccessor): it packs their uncut 2-chart atlases better (Box
-/// 0.628), so the pipeline's packing-aware cut (`atlas::cut_for_packing`, tried below 0.61, on
-/// at most 32 charts) no longer ran, and Box lost 0.642 → 0.628. Above 32 charts that cut is
-/// never tried, so the two cannot interact. Cost on 2CylinderEngine (2 threads, one run each,
-/// load 1.6): pack stage 13.8 s by the first fit (16 angles) → 23.6 s by the contact score
-/// with 24 angles (17 packings either way); 1 thread 41.9 s. The other corpus meshes give the
-/// same bytes as before.
+/// [`hole_rotations`] ([`hole`]); fewer charts take the plain first fit with `rotations`.
+/// Trade-off: the scored search packs many charts tighter at about twice the cost, while on a
+/// few charts the first fit leaves room for the pipeline's packing-aware cuts, which run on at
+/// most 32 charts (so the two never interact).
 pub const HOLE_SCORED_MIN_CHARTS: usize = 33;
 /// Density step of the probes of [`FIT_PROBES`], as a ratio.
 pub const FIT_PROBE_STEP: f64 = 0.01;
@@ -367,8 +232,7 @@ pub fn pack_charts(
 /// index), the box of each chart's referenced UVs in its own frame at the density where the
 /// charts would cover [`HOLE_ORDER_FILL`] of the page, grown by the padding on every side.
 /// The box, not the area, says how hard a chart is to fit (long thin or branched charts), and
-/// first fit packs the hard ones best while the page is empty. Measured on 2CylinderEngine
-/// (1024², padding 2, one run each): by area 0.553, by UV box 0.566, by padded UV box 0.5615.
+/// first fit packs the hard ones best while the page is empty.
 fn padded_box_order(
     charts: &[PackChart<'_>],
     prepared: &[place::PreparedChart],
@@ -407,10 +271,9 @@ fn padded_box_order(
 pub const HOLE_ORDER_FILL: f64 = 0.55;
 
 /// Fit-to-page packings by the horizons alone whose efficiency (placed UV area / page area) is
-/// below this are packed again with hole filling ([`hole`]), keeping the better. Measured (one
-/// run each, 1024², padding 2, 16 rotations, load 1.6; 2CylinderEngine under load): hole
-/// filling always on lifted 2CylinderEngine 0.314 → 0.52 but made other meshes' pack stage up
-/// to 2× slower for ±0.01 (armadillo 0.683 → 0.690 at 0.21 → 0.39 s, spot 0.666 → 0.650, torus 0.617 → 0.611).
+/// below this are packed again with hole filling ([`hole`]), keeping the better. Trade-off:
+/// hole filling lifts poorly packed atlases a lot, but costs up to twice the pack stage for
+/// about ±0.01 on atlases the horizons already pack well.
 pub const HOLE_FILL_BELOW: f64 = 0.60;
 
 impl PackOptions {
@@ -767,11 +630,9 @@ fn unit(v: f64) -> f64 {
 /// chart is below a texel).
 ///
 /// With more than one thread, the trial that would come next if this one had the predicted
-/// outcome is packed at the same time; measured (2 threads, 5 runs each, pack stage medians,
-/// machine loaded): bunny 0.172 → 0.137 s, armadillo 0.232 → 0.214 s, spot 0.112 → 0.096 s,
-/// 2CylinderEngine 21.4 → 19.3 s (one run), the same GLBs and trial counts; but fandisk
-/// 0.050 → 0.062 s, whose bisection steps mostly fit, against the prediction (a missed
-/// prediction costs the two trials sharing the cores instead of one trial using both).
+/// outcome is packed at the same time. Trade-off: a correct prediction saves a trial's time;
+/// a missed one costs the two trials sharing the cores instead of one trial using both (the
+/// result is the same either way).
 fn fit_to_page(
     ctx: &Context<'_, '_>,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,

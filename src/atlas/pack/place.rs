@@ -32,10 +32,12 @@
 //! Cost: per orientation rasterized, O(boundary edges × rows per edge, plus loose triangles ×
 //! rows, plus D texels / 64 × padding); orientations wider or taller than the page are not
 //! rasterized (bounded memory whatever the trial density).
+use super::hull::{convex_hull, diameter};
+use super::outline::{boundary_chain, outline_triangles};
 use super::raster::{
     fill_chain, rasterize_centres, rasterize_conservative, rasterize_touching, Mask,
 };
-use super::{PackChart, PackError};
+use super::types::{PackChart, PackError};
 
 /// Margin kept between a chart's extreme vertices and the texel lines of its span, texels.
 pub const LAYOUT_EPS_TEXELS: f64 = 1e-3;
@@ -158,133 +160,6 @@ pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChar
         chain: chain.0,
         loose: chain.1,
     })
-}
-
-/// Whether a triangle is well shaped for the boundary fill: its orientation is stable under
-/// the similarity to texels (rotation, uniform scale, rounding), as in
-/// [`super::raster::rasterize_centres`]'s thin-triangle test with the largest edge (rotation
-/// invariant, at least the box side) and a 100× margin.
-fn orientation_sign(p: [[f64; 2]; 3]) -> i32 {
-    let [a, b, c] = p;
-    let area2 = cross(a, b, c);
-    let l2 = |u: [f64; 2], v: [f64; 2]| (u[0] - v[0]).powi(2) + (u[1] - v[1]).powi(2);
-    let span2 = l2(a, b).max(l2(b, c)).max(l2(c, a));
-    if !(area2.abs() > 1e-4 * span2 && span2 > 0.0 && area2.is_finite()) {
-        0
-    } else if area2 > 0.0 {
-        1
-    } else {
-        -1
-    }
-}
-
-/// The boundary chain of the triangles of the majority orientation that are well shaped, and
-/// the others. Deterministic (sorted edges). Cost: O(t log t).
-pub fn boundary_chain(uv: &[[f64; 2]], triangles: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<u32>) {
-    let signs: Vec<i32> = triangles
-        .iter()
-        .map(|t| orientation_sign(t.map(|i| uv[i as usize])))
-        .collect();
-    let positive = signs.iter().filter(|&&s| s > 0).count();
-    let negative = signs.iter().filter(|&&s| s < 0).count();
-    let major = if positive >= negative { 1 } else { -1 };
-    let mut loose = Vec::new();
-    // (min, max, +1 if directed min→max else -1)
-    let mut edges: Vec<(u32, u32, i32)> = Vec::with_capacity(3 * triangles.len());
-    for (k, t) in triangles.iter().enumerate() {
-        if signs[k] != major {
-            loose.push(k as u32);
-            continue;
-        }
-        for e in 0..3 {
-            let (a, b) = (t[e], t[(e + 1) % 3]);
-            if a != b {
-                edges.push((a.min(b), a.max(b), if a < b { 1 } else { -1 }));
-            }
-        }
-    }
-    edges.sort_unstable();
-    let mut chain = Vec::new();
-    let mut g = 0;
-    while g < edges.len() {
-        let (a, b, _) = edges[g];
-        let mut net = 0i32;
-        while g < edges.len() && edges[g].0 == a && edges[g].1 == b {
-            net += edges[g].2;
-            g += 1;
-        }
-        for _ in 0..net.unsigned_abs() {
-            chain.push(if net > 0 { [a, b] } else { [b, a] });
-        }
-    }
-    (chain, loose)
-}
-
-/// The triangles that can touch the boundary of the chart's UV region `U` (the union of its
-/// triangles): every triangle except those whose three edges are each shared with exactly one
-/// other triangle lying strictly on the other side of the edge (by a margin far above
-/// rounding). Such an edge is interior to `U`, and a vertex whose edges are all interior is
-/// too (its fan sweeps a whole number ≥ 1 of turns), so `∂U` lies in the union of the outline
-/// triangles.
-///
-/// Why it is enough: in any column (row) strip, the extreme point of `U` is a point of `∂U`,
-/// hence of an outline triangle, whose conservative raster then holds that extreme texel; and
-/// the extreme vertices in any direction are outline vertices. So the per-line extents and the
-/// bounding box of the outline triangles are those of all the triangles (the interior, which
-/// the extents ignore, is all that is skipped). Deterministic (sorted edges, no hash map).
-///
-/// Cost: O(t log t) for t triangles, once per chart.
-pub fn outline_triangles(uv: &[[f64; 2]], triangles: &[[u32; 3]]) -> Vec<u32> {
-    let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * triangles.len());
-    for (k, t) in triangles.iter().enumerate() {
-        for e in 0..3 {
-            let (a, b) = (t[e], t[(e + 1) % 3]);
-            edges.push((a.min(b), a.max(b), k as u32));
-        }
-    }
-    edges.sort_unstable();
-    let mut mark = vec![false; triangles.len()];
-    let opposite = |t: u32, a: u32, b: u32| -> Option<u32> {
-        let tri = triangles[t as usize];
-        let mut rest = tri.iter().filter(|&&v| v != a && v != b);
-        match (rest.next(), rest.next()) {
-            (Some(&o), None) => Some(o),
-            _ => None,
-        }
-    };
-    let mut g = 0;
-    while g < edges.len() {
-        let (a, b, _) = edges[g];
-        let mut end = g + 1;
-        while end < edges.len() && edges[end].0 == a && edges[end].1 == b {
-            end += 1;
-        }
-        let interior = end - g == 2
-            && a != b
-            && match (opposite(edges[g].2, a, b), opposite(edges[g + 1].2, a, b)) {
-                (Some(o1), Some(o2)) => {
-                    let (pa, pb) = (uv[a as usize], uv[b as usize]);
-                    let (q1, q2) = (uv[o1 as usize], uv[o2 as usize]);
-                    let m = [pa, pb, q1, q2]
-                        .iter()
-                        .map(|p| p[0].abs().max(p[1].abs()))
-                        .fold(0.0, f64::max);
-                    let tol = 1e-12 * m * m;
-                    let (s1, s2) = (cross(pa, pb, q1), cross(pa, pb, q2));
-                    (s1 > tol && s2 < -tol) || (s1 < -tol && s2 > tol)
-                }
-                _ => false,
-            };
-        if !interior {
-            for e in &edges[g..end] {
-                mark[e.2 as usize] = true;
-            }
-        }
-        g = end;
-    }
-    (0..triangles.len() as u32)
-        .filter(|&k| mark[k as usize])
-        .collect()
 }
 
 /// Per-line extents of a footprint: for each column the first and last row, for each row the
@@ -738,97 +613,10 @@ fn bounds(points: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
     (lo, hi)
 }
 
-fn cross(o: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-}
-
-/// Convex hull, counter-clockwise, no collinear points (Andrew's monotone chain). Cost:
-/// O(n log n).
-fn convex_hull(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
-    let mut p: Vec<[f64; 2]> = points.to_vec();
-    p.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
-    p.dedup();
-    if p.len() < 3 {
-        return p;
-    }
-    let mut hull: Vec<[f64; 2]> = Vec::with_capacity(2 * p.len());
-    for pass in 0..2 {
-        let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &[f64; 2]>> = if pass == 0 {
-            Box::new(p.iter())
-        } else {
-            Box::new(p.iter().rev())
-        };
-        for &q in iter {
-            while hull.len() >= start + 2
-                && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
-            {
-                hull.pop();
-            }
-            hull.push(q);
-        }
-        hull.pop();
-    }
-    hull
-}
-
-/// The farthest pair of a convex polygon (rotating calipers over antipodal pairs). Cost: O(h).
-fn diameter(hull: &[[f64; 2]]) -> (usize, usize) {
-    let n = hull.len();
-    let d2 = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2);
-    match n {
-        0 | 1 => return (0, 0),
-        2 => return (0, 1),
-        _ => {}
-    }
-    let mut best = (0, 1, d2(hull[0], hull[1]));
-    let mut j = 1;
-    for i in 0..n {
-        let ni = (i + 1) % n;
-        // Advance j while the triangle (i, ni, j+1) is larger: j+1 is farther from edge i.
-        let mut steps = 0;
-        while steps < n
-            && cross(hull[i], hull[ni], hull[(j + 1) % n]) > cross(hull[i], hull[ni], hull[j])
-        {
-            j = (j + 1) % n;
-            steps += 1;
-        }
-        for (a, b) in [(i, j), (ni, j)] {
-            let d = d2(hull[a], hull[b]);
-            if d > best.2 {
-                best = (a, b, d);
-            }
-        }
-    }
-    (best.0, best.1)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn diameter_matches_brute_force() {
-        let mut state = 12345u64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
-        for _ in 0..50 {
-            let pts: Vec<[f64; 2]> = (0..40).map(|_| [next() * 3.0, next()]).collect();
-            let hull = convex_hull(&pts);
-            let (a, b) = diameter(&hull);
-            let d = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
-            let brute = pts
-                .iter()
-                .flat_map(|p| pts.iter().map(move |q| (*p, *q)))
-                .map(|(p, q)| d(p, q))
-                .fold(0.0, f64::max);
-            assert!((d(hull[a], hull[b]) - brute).abs() < 1e-12);
-        }
-    }
+    use crate::mesh::vector::orient2;
 
     #[test]
     fn dilated_extents_are_the_extents_of_the_dilated_mask() {
@@ -937,7 +725,7 @@ mod tests {
                         // Every centre in a closed triangle is marked (exact orientation tests).
                         for t in chart.triangles {
                             let [a, b, c] = tri(t);
-                            let s = cross(a, b, c).signum();
+                            let s = orient2(a, b, c).signum();
                             let (x0, x1) = (a[0].min(b[0]).min(c[0]), a[0].max(b[0]).max(c[0]));
                             let (y0, y1) = (a[1].min(b[1]).min(c[1]), a[1].max(b[1]).max(c[1]));
                             for y in (y0.floor() as i64).max(0)
@@ -949,7 +737,7 @@ mod tests {
                                     let p = [x as f64 + 0.5, y as f64 + 0.5];
                                     let inside = [(a, b), (b, c), (c, a)]
                                         .iter()
-                                        .all(|&(u, v)| cross(u, v, p) * s >= 0.0);
+                                        .all(|&(u, v)| orient2(u, v, p) * s >= 0.0);
                                     if inside && s != 0.0 {
                                         checked += 1;
                                         assert!(new.get(x, y), "chart {i}: missed centre {x},{y}");

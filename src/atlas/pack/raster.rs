@@ -6,7 +6,7 @@
 //! (square) metric, so that "the dilated footprint of A misses the footprint of B" is exactly
 //! "every texel of A is at Chebyshev distance > r from every texel of B".
 //!
-//! Why that is enough for the evaluator (`../shared/eval/atlas_eval.py`): it samples texel
+//! Why that is enough for the quality report ([`crate::atlas::measure`]): it samples texel
 //! centres. A centre that a triangle covers lies in the triangle, so its texel touches the
 //! triangle and is in the conservative footprint. The footprint is a superset of any sampled
 //! coverage, also after the `f32` rounding of the written UVs (that moves vertices by far less

@@ -1,0 +1,127 @@
+//! The pack stage's contract: its options, the chart it takes, the packing it returns and its
+//! errors. Units as in [`super`]: chart UVs in model units, placed UVs in \[0,1\]², sizes in
+//! texels, densities in texels per model unit.
+
+/// How big charts are on the page.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TexelDensity {
+    /// The largest uniform density at which every chart fits on one page. The default.
+    FitToPage,
+    /// A fixed density in texels per model unit (`> 0`, finite); more pages open when the charts
+    /// do not fit on one.
+    TexelsPerUnit(f64),
+}
+
+/// Options of [`pack_charts`](super::pack_charts).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PackOptions {
+    /// Page width in texels, `>= 1`. Default 1024.
+    pub width_texels: u32,
+    /// Page height in texels, `>= 1`. Default 1024.
+    pub height_texels: u32,
+    /// Empty texels kept between any two charts and between a chart and the page edge. Default 2.
+    pub padding_texels: u32,
+    /// Texel density. Default [`TexelDensity::FitToPage`].
+    pub density: TexelDensity,
+    /// Rotations tried per chart, evenly spaced over a full turn after orienting the chart's
+    /// maximum diameter vertically; `1` means the diameter-vertical orientation only. `>= 1`.
+    /// Default 16 (isocharts-2004 §6). Charts smaller than
+    /// [`SMALL_CHART_TEXELS`](super::SMALL_CHART_TEXELS) try at most the 4 quarter turns when
+    /// this is a multiple of 4, except when the charts are packed again with hole filling
+    /// ([`hole`](super::hole)), where every chart tries
+    /// [`hole_rotations`](super::hole_rotations) (24 for 16) when there are at least
+    /// [`HOLE_SCORED_MIN_CHARTS`](super::HOLE_SCORED_MIN_CHARTS) charts.
+    pub rotations: u32,
+}
+
+impl Default for PackOptions {
+    fn default() -> Self {
+        Self {
+            width_texels: 1024,
+            height_texels: 1024,
+            padding_texels: 2,
+            density: TexelDensity::FitToPage,
+            rotations: 16,
+        }
+    }
+}
+
+/// One flattened chart to place.
+#[derive(Debug, Clone, Copy)]
+pub struct PackChart<'a> {
+    /// UV per chart vertex in model units (any similarity of the final shape).
+    pub uv: &'a [[f64; 2]],
+    /// Triangles as indices into `uv`.
+    pub triangles: &'a [[u32; 3]],
+    /// The chart's 3-D surface area, model units². With `uv` it fixes the chart's scale:
+    /// placed UV area = area_m2 × density² (in texels²).
+    pub area_m2: f64,
+}
+
+/// A placed chart.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlacedChart {
+    /// The page it is on, `0..Packing::num_pages`.
+    pub page: u32,
+    /// UV per chart vertex, normalized page coordinates in \[0,1\]².
+    pub uv: Vec<[f64; 2]>,
+}
+
+/// The result of [`pack_charts`](super::pack_charts).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Packing {
+    /// One entry per input chart, same order.
+    pub charts: Vec<PlacedChart>,
+    /// Pages used (1 with [`TexelDensity::FitToPage`]).
+    pub num_pages: u32,
+    /// The density used, texels per model unit.
+    pub texels_per_unit: f64,
+    /// Packings run to find the density (1 with [`TexelDensity::TexelsPerUnit`]); a cost
+    /// diagnostic for reports and benchmarks.
+    pub trials: u32,
+}
+
+/// Errors of [`pack_charts`](super::pack_charts); each says what to change.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PackError {
+    /// An option has a meaningless value.
+    #[error("invalid packing option `{option}`: {detail}")]
+    InvalidOption {
+        /// The option's name, e.g. `padding_texels`.
+        option: &'static str,
+        /// What is wrong and what to use instead.
+        detail: String,
+    },
+    /// A chart cannot fit on a page even alone.
+    #[error("chart {chart} needs {needed_texels:?} texels (with padding) but a page has {page_texels:?}; lower texels_per_unit or raise the resolution")]
+    ChartTooLarge {
+        /// Index of the chart.
+        chart: usize,
+        /// Width and height it needs.
+        needed_texels: [u64; 2],
+        /// Page size.
+        page_texels: [u32; 2],
+    },
+    /// A chart's data is unusable.
+    #[error("chart {chart} cannot be packed: {detail}")]
+    InvalidChart {
+        /// Index of the chart.
+        chart: usize,
+        /// What is wrong and how to fix it.
+        detail: String,
+    },
+    /// With [`TexelDensity::FitToPage`]: even at a density where every chart is one texel, the
+    /// charts and their padding do not fit on one page.
+    #[error("{charts} charts with {padding_texels} texels of padding do not fit on one {page_texels:?} page at any density; raise the resolution, lower padding_texels, or use TexelsPerUnit (more pages)")]
+    DoesNotFit {
+        /// Number of charts to place.
+        charts: usize,
+        /// Page size.
+        page_texels: [u32; 2],
+        /// Padding asked for.
+        padding_texels: u32,
+    },
+    /// The monitor asked to stop.
+    #[error("packing was cancelled")]
+    Cancelled,
+}
