@@ -4,25 +4,14 @@
 //! when `$TEXATLAS_GLTF_VALIDATOR` names a node_modules dir with gltf-validator, with the Khronos
 //! validator (0 errors). Skipped (with a message) when `TEXATLAS_CORPUS_DIR` is unset.
 //! `TEXATLAS_CORPUS_ONLY=substr` restricts the run to matching file names.
-mod gltf_common;
-mod tools_common;
+use crate::common::gltf as gltf_common;
+use crate::common::tools as tools_common;
+// Deterministic per-corner UVs that create seams: no two faces share a UV, every edge is a seam.
+use crate::common::per_face_cell_uvs as test_uvs;
 
 use std::path::{Path, PathBuf};
 
 use texatlas::gltf_io::{decode, encode, DecodeLimits, EncodeOptions, Resources, UvTarget};
-
-/// Deterministic per-corner UVs that create seams: each face gets its own small square cell,
-/// corners placed by corner slot, so no two faces share a UV and every edge is a seam.
-fn test_uvs(faces: usize) -> Vec<[[f32; 2]; 3]> {
-    let side = (faces as f64).sqrt().ceil().max(1.0) as usize;
-    let cell = 1.0 / side as f32;
-    (0..faces)
-        .map(|f| {
-            let (x, y) = ((f % side) as f32 * cell, (f / side) as f32 * cell);
-            [[x, y], [x + 0.9 * cell, y], [x, y + 0.9 * cell]]
-        })
-        .collect()
-}
 
 #[test]
 fn corpus_round_trips_through_the_evaluator_and_validator() {

@@ -1,7 +1,6 @@
 //! Test support for the HTTP tests: the real server on `127.0.0.1:0` with a temp data dir,
 //! a scripted fake processor, generated assets, and response validation against
 //! `proto/openapi.json`.
-#![allow(dead_code)]
 
 use std::ops::ControlFlow;
 use std::path::PathBuf;
@@ -14,25 +13,7 @@ use texatlas::atlas::{Progress, Stage};
 use texatlas::jobs::{JobFailure, JobInput, JobOutput, Processor};
 use texatlas::service::{self, ServiceConfig};
 
-/// Serves `https://texatlas.dev/proto/<file>` from `proto/`, and nothing else (offline).
-struct ProtoRetriever;
-
-impl jsonschema::Retrieve for ProtoRetriever {
-    fn retrieve(
-        &self,
-        uri: &jsonschema::Uri<String>,
-    ) -> Result<Value, Box<dyn std::error::Error + Send + Sync>> {
-        let name = uri
-            .as_str()
-            .strip_prefix("https://texatlas.dev/proto/")
-            .filter(|n| !n.contains('/') && !n.contains(".."))
-            .ok_or_else(|| format!("{uri} is not a proto/ document"))?;
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("proto")
-            .join(name);
-        Ok(serde_json::from_str(&std::fs::read_to_string(path)?)?)
-    }
-}
+use super::proto::ProtoRetriever;
 
 /// `max_charts` values that script the fake processor.
 pub const PANIC: usize = 900_001;
@@ -352,14 +333,6 @@ pub fn glb(doc: &Value, bin: &[u8]) -> Vec<u8> {
     out.extend_from_slice(b"BIN\0");
     out.extend_from_slice(&bin);
     out
-}
-
-/// A fixture from tests/fixtures.
-pub fn fixture(name: &str) -> Vec<u8> {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(name);
-    std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 /// Submits a GLB; the response.

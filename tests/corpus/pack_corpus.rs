@@ -4,7 +4,7 @@
 //! asserts the stage guarantees with the independent checker. The 1M-triangle mesh is left out
 //! unless `TEXATLAS_CORPUS_ALL` is set.
 //!
-//! Run: `TEXATLAS_CORPUS_DIR=../shared/corpus cargo test --release --test pack_corpus -- --nocapture`.
+//! Run: `TEXATLAS_CORPUS_DIR=../shared/corpus cargo test --release --test corpus -- pack_corpus:: --nocapture`.
 use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::time::Instant;

@@ -3,42 +3,17 @@
 //! every attribute / morph-target value, that the UV set lands where expected, that vertices
 //! are split only where the UVs differ, and that everything outside the rewritten primitives is
 //! unchanged.
-mod gltf_common;
+use crate::common::fixture;
+use crate::common::gltf as gltf_common;
 
 use std::collections::BTreeSet;
 
-use gltf_common::{kitchen_sink, parse, Builder, Doc};
+use gltf_common::{kitchen_sink, parse, strip_unknown, test_uvs, Builder, Doc};
 use serde_json::{json, Value};
 use texatlas::gltf_io::{
     decode, encode, required_resources, Asset, DecodeLimits, EncodeOptions, ErrorCode,
     OldVertexData, OutputFormat, PrimitiveMode, Resources, SourceFormat, UvTarget,
 };
-
-fn fixture(name: &str) -> Vec<u8> {
-    let path = format!("{}/tests/fixtures/{name}", env!("CARGO_MANIFEST_DIR"));
-    std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
-}
-
-/// Seam-creating test UVs: a per-vertex UV, shifted by (0.25, 0) on every third face, so some
-/// edges are seams and the rest share UVs.
-fn test_uvs(asset: &Asset) -> Vec<[[f32; 2]; 3]> {
-    asset
-        .mesh_input()
-        .triangles
-        .iter()
-        .enumerate()
-        .map(|(f, t)| {
-            t.map(|v| {
-                let base = [(v as f32 * 0.618_034) % 1.0, (v as f32 * 0.377_1) % 1.0];
-                if f % 3 == 0 {
-                    [base[0] * 0.5 + 0.25, base[1]]
-                } else {
-                    base
-                }
-            })
-        })
-        .collect()
-}
 
 /// Top-level keys `encode` may change; everything else must be JSON-equal.
 const REWRITTEN: [&str; 5] = ["meshes", "accessors", "bufferViews", "buffers", "images"];
@@ -786,23 +761,6 @@ fn old_vertex_data_is_dropped_only_when_safe() {
     // An unknown extension might reference accessors: nothing is dropped.
     let (kept, dropped) = sizes(&kitchen_sink().glb());
     assert_eq!(kept, dropped);
-}
-
-/// Removes every `EXT_unknown_thing` extension object from a tree.
-fn strip_unknown(value: &mut Value) {
-    match value {
-        Value::Object(map) => {
-            if let Some(Value::Object(exts)) = map.get_mut("extensions") {
-                exts.remove("EXT_unknown_thing");
-                if exts.is_empty() {
-                    map.remove("extensions");
-                }
-            }
-            map.values_mut().for_each(strip_unknown);
-        }
-        Value::Array(items) => items.iter_mut().for_each(strip_unknown),
-        _ => {}
-    }
 }
 
 #[test]

@@ -16,8 +16,9 @@
 //! sets it): the fixtures in `tests/fixtures` and generated meshes must agree. With
 //! `TEXATLAS_CORPUS_DIR` also set, every corpus `.glb` is compared too, except the 1M-triangle
 //! one, which is only timed (the evaluator needs ~12 s and 1.7 GB on it); a table is printed.
-mod gltf_common;
-mod tools_common;
+use crate::common::gltf as gltf_common;
+use crate::common::per_face_cell_uvs;
+use crate::common::tools as tools_common;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -503,19 +504,6 @@ fn measure_agrees_with_the_evaluator_on_the_corpus() {
         })
         .collect();
     run_all("corpus", assets, &evaluator);
-}
-
-/// UVs of a well-formed atlas for timing: every face in its own square cell (no overlap, every
-/// edge a seam: the most charts possible), as `tests/corpus_roundtrip.rs` makes them.
-fn per_face_cell_uvs(faces: usize) -> Vec<[[f32; 2]; 3]> {
-    let side = (faces as f64).sqrt().ceil().max(1.0) as usize;
-    let cell = 1.0 / side as f32;
-    (0..faces)
-        .map(|f| {
-            let (x, y) = ((f % side) as f32 * cell, (f / side) as f32 * cell);
-            [[x, y], [x + 0.9 * cell, y], [x, y + 0.9 * cell]]
-        })
-        .collect()
 }
 
 /// CPU time of this process (all threads), seconds, from `/proc/self/stat` (Linux; 0 elsewhere).

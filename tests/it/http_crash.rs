@@ -1,7 +1,7 @@
 //! Crash recovery with the real binary: start `texatlas serve`, submit 5 jobs, `kill -9` it
 //! while a job runs, restart it on the same data dir: every job ends `succeeded`, none is lost
 //! and none is duplicated.
-mod http_common;
+use crate::common::http as http_common;
 
 use std::io::{BufRead as _, BufReader};
 use std::process::{Child, Command, Stdio};

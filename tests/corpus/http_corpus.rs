@@ -4,8 +4,8 @@
 //! `proto/report.schema.json`, and (when `TEXATLAS_GLTF_VALIDATOR` and `TEXATLAS_EVAL_DIR` are
 //! set) the Khronos glTF-Validator reports 0 errors and the independent evaluator
 //! (`atlas_eval.py --input`) finds the round trip ok, 0 flips, 0 overlaps, 0 padding violations.
-mod http_common;
-mod tools_common;
+use crate::common::http as http_common;
+use crate::common::tools as tools_common;
 
 use std::path::PathBuf;
 use std::sync::Arc;

@@ -5,43 +5,19 @@
 //! vertices, every part keeps the source primitive's material / extras / extensions, the part
 //! list is right, single-page input is byte-identical to `encode`, bad page lists are typed
 //! errors, and (with `TEXATLAS_GLTF_VALIDATOR`) the Khronos validator finds 0 errors.
-mod gltf_common;
+use crate::common::fixture;
+use crate::common::gltf as gltf_common;
 
 use std::collections::BTreeSet;
 use std::path::Path;
 use std::process::Command;
 
-use gltf_common::{kitchen_sink, parse, Builder, Doc};
+use gltf_common::{kitchen_sink, parse, strip_unknown, test_uvs, Builder, Doc};
 use serde_json::{json, Value};
 use texatlas::gltf_io::{
     decode, encode, encode_pages, Asset, DecodeLimits, EncodeOptions, EncodedAsset, EncodedPart,
     ErrorCode, OutputFormat, Resources, UvTarget,
 };
-
-fn fixture(name: &str) -> Vec<u8> {
-    let path = format!("{}/tests/fixtures/{name}", env!("CARGO_MANIFEST_DIR"));
-    std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
-}
-
-/// Seam-creating per-vertex UVs (some corners share a UV, every third face is shifted).
-fn test_uvs(asset: &Asset) -> Vec<[[f32; 2]; 3]> {
-    asset
-        .mesh_input()
-        .triangles
-        .iter()
-        .enumerate()
-        .map(|(f, t)| {
-            t.map(|v| {
-                let base = [(v as f32 * 0.618_034) % 1.0, (v as f32 * 0.377_1) % 1.0];
-                if f % 3 == 0 {
-                    [base[0] * 0.5 + 0.25, base[1]]
-                } else {
-                    base
-                }
-            })
-        })
-        .collect()
-}
 
 /// The kitchen sink (morph targets, sparse, quantized, strip and fan, unknown extensions and
 /// extras everywhere) plus a `KHR_materials_variants` mapping on the grid primitive, which a
@@ -61,23 +37,6 @@ fn sink_with_variants() -> Builder {
         .expect("extensionsUsed")
         .push(json!("KHR_materials_variants"));
     b
-}
-
-/// Removes every `EXT_unknown_thing` extension object, so old vertex data can be dropped.
-fn strip_unknown(value: &mut Value) {
-    match value {
-        Value::Object(map) => {
-            if let Some(Value::Object(exts)) = map.get_mut("extensions") {
-                exts.remove("EXT_unknown_thing");
-                if exts.is_empty() {
-                    map.remove("extensions");
-                }
-            }
-            map.values_mut().for_each(strip_unknown);
-        }
-        Value::Array(items) => items.iter_mut().for_each(strip_unknown),
-        _ => {}
-    }
 }
 
 /// Faces of the kitchen sink: grid 0..8, fan 8..11, strip 11..13. The grid spreads over pages

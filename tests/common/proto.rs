@@ -12,7 +12,7 @@ pub fn schema_json(name: &str) -> serde_json::Value {
 }
 
 /// Serves `https://texatlas.dev/proto/<file>` from `proto/`, and nothing else.
-struct ProtoRetriever;
+pub struct ProtoRetriever;
 
 impl jsonschema::Retrieve for ProtoRetriever {
     fn retrieve(

@@ -8,7 +8,7 @@
 //! the packer does). The 1M-triangle mesh is left out unless `TEXATLAS_CORPUS_ALL` is set (it
 //! takes minutes in a debug build).
 //!
-//! Run by hand: `TEXATLAS_CORPUS_DIR=../shared/corpus cargo test --test segment_corpus -- --nocapture`
+//! Run by hand: `TEXATLAS_CORPUS_DIR=../shared/corpus cargo test --test corpus -- segment_corpus:: --nocapture`
 //! (add `TEXATLAS_CORPUS_ONLY=bunny,armadillo` to run only the files whose names contain a word).
 use std::path::PathBuf;
 use std::time::Instant;

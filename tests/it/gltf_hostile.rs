@@ -1,18 +1,14 @@
 //! Hostile inputs: every one gives a typed error naming the fault (code + JSON path), never a
 //! panic, a hang, or an allocation beyond the limits. `decode` turns a panic into
 //! `ErrorCode::Internal`, so "no panic" is asserted as "never Internal".
-mod gltf_common;
+use crate::common::fixture;
+use crate::common::gltf as gltf_common;
 
 use gltf_common::{glb_bytes, Builder};
 use serde_json::json;
 use texatlas::gltf_io::{
     decode, encode, Asset, DecodeLimits, EncodeOptions, ErrorCode, GltfError, Resources,
 };
-
-fn fixture(name: &str) -> Vec<u8> {
-    let path = format!("{}/tests/fixtures/{name}", env!("CARGO_MANIFEST_DIR"));
-    std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
-}
 
 fn run(bytes: &[u8]) -> Result<Asset, GltfError> {
     decode(bytes, &Resources::new(), &DecodeLimits::default())

@@ -1,5 +1,5 @@
 //! Manual measurement of `TriangleMesh::build` at scale (ignored by default; run with
-//! `cargo test --release --test mesh_build_bench -- --ignored --nocapture`).
+//! `cargo test --release --test it -- mesh_build_bench:: --ignored --nocapture`).
 //!
 //! - `build_1m_triangle_grid`: a generated 707 × 707 grid (999,698 triangles, 501,264 vertices).
 //! - `build_raw_mesh_from_env`: a mesh dumped to a raw file named by `TEXATLAS_RAW_MESH`

@@ -9,7 +9,7 @@
 //! Skipped (with a message) when `TEXATLAS_CORPUS_DIR` is unset. The 1M-triangle file is left out
 //! unless `TEXATLAS_CORPUS_ALL` is set (`texatlas bench` covers it).
 //! `TEXATLAS_CORPUS_ONLY=substr` restricts the run to matching names.
-mod tools_common;
+use crate::common::tools as tools_common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

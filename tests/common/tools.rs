@@ -3,7 +3,6 @@
 //! glTF-Validator (`$TEXATLAS_EVAL_DIR/gltf_validate.js` with `NODE_PATH=$TEXATLAS_GLTF_VALIDATOR`).
 //! Both are run as child processes and their JSON is returned as is; the suites decide what to
 //! assert.
-#![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

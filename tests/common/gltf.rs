@@ -2,7 +2,6 @@
 //! corpus lacks) and an independent reader that expands every triangle primitive into
 //! per-corner attribute bytes. The reader shares no code with `texatlas::gltf_io`, so round-trip
 //! checks compare the crate against a second implementation (libigl-style).
-#![allow(dead_code)]
 
 use serde_json::{json, Map, Value};
 
@@ -551,4 +550,49 @@ pub fn glb_of_meshes(parts: &[texatlas::mesh::MeshInput]) -> Vec<u8> {
     }
     b.push("scenes", json!({ "nodes": nodes }));
     b.glb()
+}
+
+/// Seam-creating test UVs: a per-vertex UV, shifted by (0.25, 0) on every third face, so some
+/// edges are seams and the rest share UVs.
+pub fn test_uvs(asset: &texatlas::gltf_io::Asset) -> Vec<[[f32; 2]; 3]> {
+    asset
+        .mesh_input()
+        .triangles
+        .iter()
+        .enumerate()
+        .map(|(f, t)| {
+            t.map(|v| {
+                let base = [(v as f32 * 0.618_034) % 1.0, (v as f32 * 0.377_1) % 1.0];
+                if f % 3 == 0 {
+                    [base[0] * 0.5 + 0.25, base[1]]
+                } else {
+                    base
+                }
+            })
+        })
+        .collect()
+}
+
+/// Removes every `EXT_unknown_thing` extension object from a tree, so old vertex data can be
+/// dropped.
+pub fn strip_unknown(value: &mut Value) {
+    match value {
+        Value::Object(map) => {
+            if let Some(Value::Object(exts)) = map.get_mut("extensions") {
+                exts.remove("EXT_unknown_thing");
+                if exts.is_empty() {
+                    map.remove("extensions");
+                }
+            }
+            map.values_mut().for_each(strip_unknown);
+        }
+        Value::Array(items) => items.iter_mut().for_each(strip_unknown),
+        _ => {}
+    }
+}
+
+/// A GLB of a generated torus (several charts, enough work for rayon to split), no UVs
+/// (`mesh::fixtures::torus`).
+pub fn torus_glb() -> Vec<u8> {
+    glb_of_meshes(&[texatlas::mesh::fixtures::torus(48, 24, 2.0, 0.6)])
 }

@@ -5,18 +5,15 @@
 //! written as a GLB of its own and measured: 0 flips, 0 overlaps, 0 padding violations, 0 UVs
 //! out of range, and the evaluator's chart and triangle counts equal the report's for that page.
 //! Skipped (with a message) when `TEXATLAS_EVAL_DIR` is unset; `.ci/run` sets it.
-mod gltf_common;
-mod tools_common;
+use crate::common::cli::s;
+use crate::common::gltf as gltf_common;
+use crate::common::gltf::torus_glb;
+use crate::common::tools as tools_common;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
 use serde_json::{json, Value};
-
-/// A GLB of a generated torus, no UVs (`mesh::fixtures::torus`).
-fn torus_glb() -> Vec<u8> {
-    gltf_common::glb_of_meshes(&[texatlas::mesh::fixtures::torus(48, 24, 2.0, 0.6)])
-}
 
 /// The triangles of `primitives` (`(mesh, primitive)` of `doc`) as one non-indexed primitive
 /// with POSITION and TEXCOORD_0 per corner, and its triangle count.
@@ -46,10 +43,6 @@ fn page_glb(doc: &gltf_common::Doc, primitives: &[(usize, usize)]) -> (Vec<u8>, 
     );
     b.push("nodes", json!({"mesh": 0}));
     (b.glb(), positions.len() / 3)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
 }
 
 #[test]

@@ -1,6 +1,6 @@
 //! Packing figures on generated chart sets: efficiency (Σ UV area / page area) and time, with
 //! the independent checker of `texatlas::atlas::pack::test_charts`. Prints one line per case;
-//! asserts the stage guarantees. Run: `cargo test --release --test pack_bench -- --nocapture`.
+//! asserts the stage guarantees. Run: `cargo test --release --test it -- pack_bench:: --nocapture`.
 use std::ops::ControlFlow;
 use std::time::Instant;
 

@@ -1,38 +1,19 @@
 //! `texatlas unwrap` as a user runs it: the real binary on fixture files and generated assets.
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::PathBuf;
+use std::process::Command;
 
-mod gltf_common;
-mod proto_common;
+use crate::common::cli::{s, stderr, texatlas};
+use crate::common::fixture_path as fixture;
+use crate::common::gltf::torus_glb;
+use crate::common::proto as proto_common;
 
 use proto_common::violations;
 use texatlas::gltf_io::{decode, DecodeLimits, Resources};
-
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(name)
-}
-
-fn texatlas(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_texatlas"))
-        .args(args)
-        .output()
-        .expect("run texatlas")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("texatlas-cli-unwrap-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     dir.join(name)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
 }
 
 #[test]
@@ -163,11 +144,6 @@ fn bad_options_and_files_fail_with_a_clear_message() {
     assert!(e.contains("lower texels_per_unit"), "{e}");
     assert_eq!(e.matches("packing failed").count(), 1, "said once: {e}");
     assert!(!out.exists(), "no output on failure");
-}
-
-/// A GLB of a generated torus (several charts, enough work for rayon to split).
-fn torus_glb() -> Vec<u8> {
-    gltf_common::glb_of_meshes(&[texatlas::mesh::fixtures::torus(48, 24, 2.0, 0.6)])
 }
 
 #[test]

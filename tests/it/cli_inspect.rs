@@ -1,27 +1,8 @@
 //! `texatlas inspect` as a user runs it: the real binary on fixture files.
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(name)
-}
-
-fn texatlas(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_texatlas"))
-        .args(args)
-        .output()
-        .expect("run texatlas")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use crate::common::cli::{stderr, stdout, texatlas};
+use crate::common::fixture_path as fixture;
 
 fn schema() -> jsonschema::Validator {
     let text = std::fs::read_to_string(

@@ -1,7 +1,8 @@
 //! The HTTP service over a real socket (server on 127.0.0.1:0, temp data dir, reqwest), with a
 //! scripted fake processor so the queue, events, cancel, errors and auth are tested without the
 //! pipeline's cost; `real_pipeline_*` tests run the production processor on fixtures.
-mod http_common;
+use crate::common::fixture;
+use crate::common::http as http_common;
 
 use std::sync::Arc;
 use std::time::Duration;
