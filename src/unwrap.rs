@@ -7,12 +7,12 @@
 //! Not core: it measures wall-clock time (the report's `timings_s`), and joins `gltf_io`,
 //! `mesh`, `atlas` and `api`. It does no IO: bytes in, bytes out.
 //!
-//! Errors: [`UnwrapError`], each with a stable [`UnwrapError::code`] for problem+json bodies and
-//! a message that says what to fix.
+//! Errors: [`UnwrapError`], each with a stable [`ProblemCode`] (`ProblemCode::from(&error)`) for
+//! problem+json bodies and a message that says what to fix.
 use std::ops::ControlFlow;
 use std::time::Instant;
 
-use crate::api::{OptionsJson, ReportJson, UnwrapSettings};
+use crate::api::{OptionsJson, ProblemCode, ReportJson, UnwrapSettings};
 use crate::atlas::{self, Atlas, AtlasError, Progress, Stage};
 use crate::gltf_io::{self, Asset, EncodeOptions, EncodedAsset, GltfError};
 use crate::mesh::{MeshBuildError, TriangleMesh};
@@ -50,16 +50,12 @@ impl From<GltfError> for UnwrapError {
     }
 }
 
-impl UnwrapError {
-    /// Stable snake_case code.
-    pub fn code(&self) -> &'static str {
-        match self {
-            UnwrapError::Mesh(e) => e.code(),
-            UnwrapError::Atlas(AtlasError::InvalidOption { .. }) => "invalid_option",
-            UnwrapError::Atlas(AtlasError::Cancelled { .. }) => "cancelled",
-            UnwrapError::Atlas(AtlasError::Unparameterizable { .. }) => "unparameterizable_chart",
-            UnwrapError::Atlas(AtlasError::Pack(_)) => "packing_failed",
-            UnwrapError::Encode(e) => e.code.as_str(),
+impl From<&UnwrapError> for ProblemCode {
+    fn from(e: &UnwrapError) -> ProblemCode {
+        match e {
+            UnwrapError::Mesh(e) => e.into(),
+            UnwrapError::Atlas(e) => e.into(),
+            UnwrapError::Encode(e) => e.into(),
         }
     }
 }
