@@ -498,7 +498,7 @@ pub(crate) async fn metrics(State(state): State<AppState>) -> Result<Response, A
     let mut r = text.into_response();
     r.headers_mut().insert(
         header::CONTENT_TYPE,
-        HeaderValue::from_static("text/plain; version=0.0.4; charset=utf-8"),
+        HeaderValue::from_static(crate::jobs::METRICS_CONTENT_TYPE),
     );
     Ok(r)
 }
