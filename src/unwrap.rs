@@ -7,12 +7,17 @@
 //! Not core: it measures wall-clock time (the report's `timings_s`), and joins `gltf_io`,
 //! `mesh`, `atlas` and `api`. It does no IO: bytes in, bytes out.
 //!
-//! Errors: [`UnwrapError`], each with a stable [`UnwrapError::code`] for problem+json bodies and
-//! a message that says what to fix.
+//! Dependency direction: `unwrap` → `api`, never back. `api` is the wire layer built from
+//! domain types (`mesh`, `atlas`, `gltf_io`); this module is a shell above it that produces
+//! the wire report for the CLI, the bench and the jobs alike, so it converts its own
+//! [`StepTimings`] to the wire's [`TimingsJsonS`].
+//!
+//! Errors: [`UnwrapError`], each with a stable [`ProblemCode`] (`ProblemCode::from(&error)`) for
+//! problem+json bodies and a message that says what to fix.
 use std::ops::ControlFlow;
 use std::time::Instant;
 
-use crate::api::{OptionsJson, ReportJson, UnwrapSettings};
+use crate::api::{OptionsJson, ProblemCode, ReportJson, TimingsJsonS, UnwrapSettings};
 use crate::atlas::{self, Atlas, AtlasError, Progress, Stage};
 use crate::gltf_io::{self, Asset, EncodeOptions, EncodedAsset, GltfError};
 use crate::mesh::{MeshBuildError, TriangleMesh};
@@ -50,16 +55,12 @@ impl From<GltfError> for UnwrapError {
     }
 }
 
-impl UnwrapError {
-    /// Stable snake_case code.
-    pub fn code(&self) -> &'static str {
-        match self {
-            UnwrapError::Mesh(e) => e.code(),
-            UnwrapError::Atlas(AtlasError::InvalidOption { .. }) => "invalid_option",
-            UnwrapError::Atlas(AtlasError::Cancelled { .. }) => "cancelled",
-            UnwrapError::Atlas(AtlasError::Unparameterizable { .. }) => "unparameterizable_chart",
-            UnwrapError::Atlas(AtlasError::Pack(_)) => "packing_failed",
-            UnwrapError::Encode(e) => e.code.as_str(),
+impl From<&UnwrapError> for ProblemCode {
+    fn from(e: &UnwrapError) -> ProblemCode {
+        match e {
+            UnwrapError::Mesh(e) => e.into(),
+            UnwrapError::Atlas(e) => e.into(),
+            UnwrapError::Encode(e) => e.into(),
         }
     }
 }
@@ -75,6 +76,21 @@ pub struct StepTimings {
     pub encode_s: f64,
     /// Everything above.
     pub total_s: f64,
+}
+
+impl From<&StepTimings> for TimingsJsonS {
+    fn from(t: &StepTimings) -> TimingsJsonS {
+        let stage = |st: Stage| t.stages_s[st as usize];
+        TimingsJsonS {
+            build: t.build_s,
+            segment: stage(Stage::Segment),
+            parameterize: stage(Stage::Parameterize),
+            pack: stage(Stage::Pack),
+            measure: stage(Stage::Measure),
+            encode: t.encode_s,
+            total: t.total_s,
+        }
+    }
 }
 
 /// The result of [`unwrap_asset`].
@@ -157,7 +173,7 @@ pub fn unwrap_asset(
         &atlas,
         &encoded,
         &OptionsJson::effective(settings),
-        &timings,
+        TimingsJsonS::from(&timings),
     );
     Ok(Unwrapped {
         encoded,

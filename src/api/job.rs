@@ -5,6 +5,7 @@
 //! Times on the wire are RFC 3339 UTC strings with milliseconds (`2025-01-31T12:00:00.123Z`).
 use serde::{Deserialize, Serialize};
 
+use super::ProblemCode;
 use crate::gltf_io::GltfError;
 
 /// One job, as `GET /v1/jobs/{id}` returns it.
@@ -94,7 +95,7 @@ pub struct ApiProblemJson {
     /// The HTTP status (for a job's error: the status it would have as a response).
     pub status: u16,
     /// Stable snake_case code, for programs.
-    pub code: String,
+    pub code: ProblemCode,
     /// What is wrong and how to fix it, for people.
     pub detail: String,
     /// Every defect found in the asset, each with its JSON path.
@@ -107,16 +108,42 @@ pub struct ApiProblemJson {
 
 impl ApiProblemJson {
     /// A problem with `code`, no defects and no request id.
-    pub fn new(status: u16, code: &str, title: &str, detail: impl Into<String>) -> ApiProblemJson {
+    pub fn new(
+        status: u16,
+        code: ProblemCode,
+        title: &str,
+        detail: impl Into<String>,
+    ) -> ApiProblemJson {
         ApiProblemJson {
             type_: format!("urn:texatlas:problem:{code}"),
             title: title.to_string(),
             status,
-            code: code.to_string(),
+            code,
             detail: detail.into(),
             defects: Vec::new(),
             request_id: None,
         }
+    }
+
+    /// A problem body stored as text (a failed job's `error_json`) read back; `None` when the
+    /// text is not a problem body. A code that this version does not know (the row was
+    /// written by another version) must not lose the job's error: it reads as
+    /// `internal_error`, and `detail` starts with the stored code.
+    pub fn from_stored(text: &str) -> Option<ApiProblemJson> {
+        let mut value: serde_json::Value = serde_json::from_str(text).ok()?;
+        let stored = value.get("code")?.as_str()?.to_string();
+        if ProblemCode::parse(&stored).is_none() {
+            let detail = value.get("detail").and_then(|d| d.as_str()).unwrap_or("");
+            let detail = format!("(stored code `{stored}`, unknown to this version) {detail}");
+            let object = value.as_object_mut()?;
+            object.insert("detail".into(), detail.into());
+            object.insert("code".into(), ProblemCode::InternalError.as_str().into());
+            object.insert(
+                "type".into(),
+                format!("urn:texatlas:problem:{}", ProblemCode::InternalError).into(),
+            );
+        }
+        serde_json::from_value(value).ok()
     }
 }
 
@@ -185,9 +212,33 @@ mod tests {
 
     #[test]
     fn problem_type_names_the_code() {
-        let p = ApiProblemJson::new(404, "job_not_found", "Not found", "no such job");
+        let p = ApiProblemJson::new(404, ProblemCode::JobNotFound, "Not found", "no such job");
         let v = serde_json::to_value(&p).unwrap();
         assert_eq!(v["type"], "urn:texatlas:problem:job_not_found");
+        assert_eq!(v["code"], "job_not_found");
         assert!(v.get("defects").is_none());
+    }
+
+    /// The text stored for a failed job before codes were an enum (as `JobFailure::problem`
+    /// wrote it) reads back, and is written again byte for byte.
+    #[test]
+    fn stored_problems_read_back_unchanged() {
+        let stored = r#"{"type":"urn:texatlas:problem:time_limit_exceeded","title":"Internal error","status":500,"code":"time_limit_exceeded","detail":"the job ran longer than the per-job limit of 1 s"}"#;
+        let p = ApiProblemJson::from_stored(stored).unwrap();
+        assert_eq!(p.code, ProblemCode::TimeLimitExceeded);
+        assert_eq!(serde_json::to_string(&p).unwrap(), stored);
+    }
+
+    #[test]
+    fn an_unknown_stored_code_reads_as_internal_error_and_keeps_its_name() {
+        let stored = r#"{"type":"urn:texatlas:problem:gpu_melted","title":"Internal error","status":500,"code":"gpu_melted","detail":"it got hot"}"#;
+        let p = ApiProblemJson::from_stored(stored).unwrap();
+        assert_eq!(p.code, ProblemCode::InternalError);
+        assert_eq!(p.type_, "urn:texatlas:problem:internal_error");
+        assert_eq!(p.status, 500);
+        assert!(p.detail.contains("`gpu_melted`"), "{}", p.detail);
+        assert!(p.detail.ends_with("it got hot"), "{}", p.detail);
+        assert_eq!(ApiProblemJson::from_stored("not json"), None);
+        assert_eq!(ApiProblemJson::from_stored(r#"{"code":"x"}"#), None);
     }
 }

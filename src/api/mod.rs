@@ -5,13 +5,16 @@
 //! - [`OptionsJson`] ↔ `proto/options.schema.json` (the options of an unwrap, the same names
 //!   for CLI flags, HTTP query parameters and the multipart `options` part);
 //! - [`ReportJson`] ↔ `proto/report.schema.json` (`texatlas unwrap --report`, the job report).
-//! - [`JobJson`], [`JobListJson`], [`ProblemJson`] ↔ `proto/openapi.json` (the HTTP service).
+//! - [`JobJson`], [`JobListJson`], [`ApiProblemJson`] with its [`ProblemCode`] ↔
+//!   `proto/openapi.json` (the HTTP service).
 mod inspect;
 mod job;
 mod options;
+mod problem;
 mod report;
 
 pub use inspect::*;
 pub use job::*;
 pub use options::*;
+pub use problem::ProblemCode;
 pub use report::*;

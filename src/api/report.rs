@@ -1,14 +1,15 @@
 //! The report of one unwrap on the wire ↔ `proto/report.schema.json`.
 //!
 //! Built from plain domain data ([`Atlas`], its [`crate::atlas::AtlasReport`], the encoded
-//! asset, the effective options and the measured timings) by [`ReportJson::new`].
+//! asset, the effective options and the measured timings) by [`ReportJson::new`]. The timings
+//! come in as [`TimingsJsonS`]: the wire layer does not depend on the `unwrap` module, which
+//! measures them (and builds this report), so the dependency runs `unwrap` → `api` only.
 use serde::Serialize;
 
 use crate::api::OptionsJson;
-use crate::atlas::{Atlas, AtlasReport, Stage};
+use crate::atlas::{Atlas, AtlasReport};
 use crate::gltf_io::{Asset, EncodedAsset};
 use crate::mesh::BuiltMesh;
-use crate::unwrap::StepTimings;
 
 /// Version of the report document; bumped on any incompatible change.
 pub const REPORT_SCHEMA_VERSION: u32 = 1;
@@ -138,7 +139,7 @@ impl ReportJson {
         atlas: &Atlas,
         encoded: &EncodedAsset,
         options: &OptionsJson,
-        timings: &StepTimings,
+        timings_s: TimingsJsonS,
     ) -> Self {
         let resolution = options
             .resolution
@@ -165,7 +166,6 @@ impl ReportJson {
             }
         }
         let s = &atlas.stats;
-        let stage = |st: Stage| timings.stages_s[st as usize];
         ReportJson {
             schema_version: REPORT_SCHEMA_VERSION,
             texatlas_version: env!("CARGO_PKG_VERSION"),
@@ -194,15 +194,7 @@ impl ReportJson {
                 pack_trials: s.pack_trials,
                 degenerate_charts: s.degenerate_charts,
             },
-            timings_s: TimingsJsonS {
-                build: timings.build_s,
-                segment: stage(Stage::Segment),
-                parameterize: stage(Stage::Parameterize),
-                pack: stage(Stage::Pack),
-                measure: stage(Stage::Measure),
-                encode: timings.encode_s,
-                total: timings.total_s,
-            },
+            timings_s,
         }
     }
 }

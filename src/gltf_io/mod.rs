@@ -44,11 +44,15 @@
 //! glTF 2.0 specification (Khronos, 2021): §3.6 buffers/accessors, §3.7.2 primitive modes and
 //! strip/fan triangle order, §4.4 GLB; `KHR_mesh_quantization`.
 mod accessor;
+mod bin_writer;
 mod decode;
 mod encode;
 mod error;
 mod glb;
+mod old_data;
+mod triangles;
 mod uri;
+mod validate;
 
 pub use decode::{
     decode, required_resources, Asset, AssetSummary, DecodeLimits, MeshSummary, PrimitiveMode,

@@ -10,8 +10,6 @@
 //! encoding).
 use std::collections::BTreeMap;
 
-use base64::Engine as _;
-
 use super::error::{ErrorCode, GltfError};
 
 /// External files of a `.gltf` (buffers and images), supplied by the caller as named byte
@@ -97,8 +95,8 @@ pub(crate) fn resolve<'a>(
     path: &str,
     resources: &'a Resources,
 ) -> Result<Resolved<'a>, GltfError> {
-    if let Some(rest) = uri.strip_prefix("data:") {
-        return decode_data_uri(rest, path).map(Resolved::Data);
+    if uri.starts_with("data:") {
+        return decode_data_uri(uri, path).map(Resolved::Data);
     }
     check_relative(uri, path)?;
     resources.get(uri).map(Resolved::Supplied).ok_or_else(|| {
@@ -148,7 +146,13 @@ pub(crate) fn check_relative(uri: &str, path: &str) -> Result<(), GltfError> {
     Ok(())
 }
 
-fn decode_data_uri(rest: &str, path: &str) -> Result<Vec<u8>, GltfError> {
+/// Decodes a base64 `data:` URI with the `data-url` crate (the Fetch standard's data: URL
+/// processor): the body is percent-decoded, then forgiving-base64 decoded (ASCII whitespace
+/// ignored, `=` padding optional); a `#fragment` is ignored.
+///
+/// Only base64 data URIs are taken: glTF exporters write binary buffers and images that way,
+/// and a percent-encoded (non-base64) one is refused as `data_uri_invalid`, as before.
+fn decode_data_uri(uri: &str, path: &str) -> Result<Vec<u8>, GltfError> {
     let invalid = |why: &str| {
         GltfError::new(
             ErrorCode::DataUriInvalid,
@@ -157,17 +161,35 @@ fn decode_data_uri(rest: &str, path: &str) -> Result<Vec<u8>, GltfError> {
             "write embedded data as `data:<media type>;base64,<base64>`",
         )
     };
-    let comma = rest.find(',').ok_or_else(|| invalid("no `,` separator"))?;
-    let header = &rest[..comma];
-    let payload = &rest[comma + 1..];
-    if !header.ends_with(";base64") {
+    let url = data_url::DataUrl::process(uri).map_err(|e| match e {
+        data_url::DataUrlError::NoComma => invalid("no `,` separator"),
+        other => invalid(&other.to_string()),
+    })?;
+    let header = uri["data:".len()..].split(',').next().unwrap_or_default();
+    if !declares_base64(header) {
         return Err(invalid("only base64 data URIs are supported"));
     }
     // Cost: decodes into a new buffer of about 3/4 of the payload; bounded by the input size.
-    let bytes = base64::engine::general_purpose::STANDARD
-        .decode(payload.trim_end())
+    let (bytes, _fragment) = url
+        .decode_to_vec()
         .map_err(|e| invalid(&format!("base64 error: {e}")))?;
     Ok(bytes)
+}
+
+/// Whether a data URI's header (between `data:` and `,`) ends in `;base64`, by the rule that
+/// `data_url::DataUrl` applies and does not expose: ASCII case-insensitive, tabs and line
+/// breaks ignored, spaces allowed around `base64`.
+fn declares_base64(header: &str) -> bool {
+    let kept: Vec<u8> = header
+        .bytes()
+        .filter(|b| !matches!(b, b'\t' | b'\n' | b'\r'))
+        .collect();
+    let trimmed = kept.trim_ascii_end();
+    let Some(split) = trimmed.len().checked_sub(6) else {
+        return false;
+    };
+    let (before, word) = trimmed.split_at(split);
+    word.eq_ignore_ascii_case(b"base64") && before.trim_ascii_end().ends_with(b";")
 }
 
 #[cfg(test)]
@@ -190,6 +212,65 @@ mod tests {
         let e = resolve("data:text/plain,hello", "/p", &Resources::new()).expect_err("not base64");
         assert_eq!(e.code, ErrorCode::DataUriInvalid);
         assert_eq!(e.json_path, "/p");
+    }
+
+    fn data(uri: &str) -> Result<Vec<u8>, GltfError> {
+        match resolve(uri, "/buffers/1/uri", &Resources::new())? {
+            Resolved::Data(bytes) => Ok(bytes),
+            Resolved::Supplied(_) => panic!("{uri}: expected data"),
+        }
+    }
+
+    #[test]
+    fn base64_data_uris_in_their_written_forms() {
+        let hello = b"hello".to_vec();
+        for uri in [
+            "data:application/octet-stream;base64,aGVsbG8=",
+            // Padding is optional; whitespace and line breaks inside the payload are ignored.
+            "data:application/octet-stream;base64,aGVsbG8",
+            "data:application/octet-stream;base64,aGVs\nbG8=",
+            "data:application/octet-stream;base64,aGVs bG8=",
+            // Percent-encoded payload bytes (`%3D` is `=`) and header.
+            "data:application/octet-stream;base64,aGVsbG8%3D",
+            "data:application%2Foctet-stream;base64,aGVsbG8=",
+            // `;base64` is case-insensitive, spaces allowed; the media type may be absent.
+            "data:image/png;BASE64,aGVsbG8=",
+            "data:;base64,aGVsbG8=",
+            "data:text/plain; base64 ,aGVsbG8=",
+            // Trailing whitespace of the URI, and a fragment, are not payload.
+            "data:application/octet-stream;base64,aGVsbG8=  ",
+            "data:application/octet-stream;base64,aGVsbG8=#part",
+        ] {
+            assert_eq!(
+                data(uri).unwrap_or_else(|e| panic!("{uri}: {e}")),
+                hello,
+                "{uri}"
+            );
+        }
+        assert_eq!(
+            data("data:application/octet-stream;base64,").unwrap(),
+            Vec::<u8>::new()
+        );
+    }
+
+    #[test]
+    fn bad_data_uris_are_data_uri_invalid_at_their_path() {
+        for (uri, why) in [
+            ("data:application/octet-stream;base64", "no `,`"),
+            ("data:", "no `,`"),
+            ("data:application/octet-stream;base64,aGVsbG8*", "base64"),
+            ("data:application/octet-stream;base64,a", "base64"),
+            ("data:application/octet-stream;base64,aG=VsbG8", "base64"),
+            ("data:application/octet-stream,hello", "only base64"),
+            ("data:application/octet-stream,hello%20world", "only base64"),
+            ("data:application/base64,aGVsbG8=", "only base64"),
+            ("data:text/plain;charset=base64,aGVsbG8=", "only base64"),
+        ] {
+            let e = data(uri).expect_err(uri);
+            assert_eq!(e.code, ErrorCode::DataUriInvalid, "{uri}");
+            assert_eq!(e.json_path, "/buffers/1/uri", "{uri}");
+            assert!(e.detail.contains(why), "{uri}: {}", e.detail);
+        }
     }
 
     #[test]

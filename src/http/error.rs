@@ -7,7 +7,7 @@
 use axum::http::{header, HeaderValue, StatusCode};
 use axum::response::{IntoResponse, Response};
 
-use crate::api::{ApiProblemJson, AssetDefectJson};
+use crate::api::{ApiProblemJson, AssetDefectJson, ProblemCode};
 
 tokio::task_local! {
     /// The id of the request being handled (set by the logging middleware).
@@ -34,7 +34,7 @@ struct Inner {
 
 impl ApiError {
     /// An error with `status`, `code` and `detail`.
-    pub fn new(status: StatusCode, code: &str, detail: impl Into<String>) -> ApiError {
+    pub fn new(status: StatusCode, code: ProblemCode, detail: impl Into<String>) -> ApiError {
         let title = status.canonical_reason().unwrap_or("Error");
         ApiError(Box::new(Inner {
             status,
@@ -46,7 +46,7 @@ impl ApiError {
     }
 
     /// 400: the request is malformed.
-    pub fn bad_request(code: &str, detail: impl Into<String>) -> ApiError {
+    pub fn bad_request(code: ProblemCode, detail: impl Into<String>) -> ApiError {
         ApiError::new(StatusCode::BAD_REQUEST, code, detail)
     }
 
@@ -54,7 +54,7 @@ impl ApiError {
     pub fn job_not_found(id: &str) -> ApiError {
         ApiError::new(
             StatusCode::NOT_FOUND,
-            "job_not_found",
+            ProblemCode::JobNotFound,
             format!(
                 "there is no job `{id}` for this API key; check the id (GET /v1/jobs lists your \
                  jobs) — finished jobs are deleted after the retention period"
@@ -64,7 +64,7 @@ impl ApiError {
 
     /// 422 with the asset's defects.
     pub fn unprocessable(
-        code: &str,
+        code: ProblemCode,
         detail: impl Into<String>,
         defects: Vec<AssetDefectJson>,
     ) -> Self {
@@ -75,13 +75,17 @@ impl ApiError {
 
     /// 401 with a `WWW-Authenticate: Bearer` challenge.
     pub fn unauthorized(detail: impl Into<String>) -> ApiError {
-        let mut e = ApiError::new(StatusCode::UNAUTHORIZED, "unauthorized", detail);
+        let mut e = ApiError::new(StatusCode::UNAUTHORIZED, ProblemCode::Unauthorized, detail);
         e.0.challenge = true;
         e
     }
 
     /// 503 with `Retry-After`.
-    pub fn unavailable(code: &str, detail: impl Into<String>, retry_after_s: u64) -> ApiError {
+    pub fn unavailable(
+        code: ProblemCode,
+        detail: impl Into<String>,
+        retry_after_s: u64,
+    ) -> ApiError {
         let mut e = ApiError::new(StatusCode::SERVICE_UNAVAILABLE, code, detail);
         e.0.retry_after_s = Some(retry_after_s.max(1));
         e
@@ -91,7 +95,7 @@ impl ApiError {
     pub fn internal(cause: impl std::fmt::Display) -> ApiError {
         let mut e = ApiError::new(
             StatusCode::INTERNAL_SERVER_ERROR,
-            "internal_error",
+            ProblemCode::InternalError,
             "the service failed to handle this request; retry later, and quote the request_id \
              when reporting it",
         );

@@ -14,7 +14,9 @@ use super::auth::Owner;
 use super::error::ApiError;
 use super::upload::{read_upload, UploadLimits};
 use super::AppState;
-use crate::api::{rfc3339_from_ms, ApiProblemJson, JobJson, JobListJson, LinksJson, ProgressJson};
+use crate::api::{
+    rfc3339_from_ms, ApiProblemJson, JobJson, JobListJson, LinksJson, ProblemCode, ProgressJson,
+};
 use crate::jobs::{
     Artifact, ArtifactOutcome, DeleteOutcome, JobRecord, JobStatus, SubmitError, Upload,
 };
@@ -42,7 +44,7 @@ pub(crate) fn job_json(job: &JobRecord) -> JobJson {
         error: job
             .error_json
             .as_deref()
-            .and_then(|t| serde_json::from_str::<ApiProblemJson>(t).ok()),
+            .and_then(ApiProblemJson::from_stored),
         links: LinksJson {
             self_: base.clone(),
             events: format!("{base}/events"),
@@ -77,7 +79,7 @@ fn idempotency_key(headers: &HeaderMap) -> Result<Option<String>, ApiError> {
         .filter(|s| !s.is_empty() && s.len() <= 255);
     ok.map(Some).ok_or_else(|| {
         ApiError::bad_request(
-            "invalid_idempotency_key",
+            ProblemCode::InvalidIdempotencyKey,
             "the Idempotency-Key header must be 1 to 255 visible ASCII characters (a UUID is a \
              good choice)",
         )
@@ -92,7 +94,7 @@ pub(crate) async fn submit(
 ) -> Result<Response, ApiError> {
     if state.is_shutting_down() {
         return Err(ApiError::unavailable(
-            "shutting_down",
+            ProblemCode::ShuttingDown,
             "the service is shutting down; retry in a moment",
             5,
         ));
@@ -115,7 +117,7 @@ pub(crate) async fn submit(
         .await
         .map_err(|e| match e {
             SubmitError::InvalidOption { option, detail } => ApiError::unprocessable(
-                "invalid_option",
+                ProblemCode::InvalidOption,
                 format!("option `{option}`: {detail}"),
                 Vec::new(),
             ),
@@ -123,9 +125,9 @@ pub(crate) async fn submit(
                 code,
                 detail,
                 defects,
-            } => ApiError::unprocessable(&code, detail, defects),
+            } => ApiError::unprocessable(code, detail, defects),
             SubmitError::IdempotencyKeyReused { job_id } => ApiError::unprocessable(
-                "idempotency_key_reused",
+                ProblemCode::IdempotencyKeyReused,
                 format!(
                     "this Idempotency-Key was used for job {job_id} with a different body; use a \
                  new key for a new request"
@@ -133,7 +135,7 @@ pub(crate) async fn submit(
                 Vec::new(),
             ),
             SubmitError::QueueFull { depth, retry_after } => ApiError::unavailable(
-                "queue_full",
+                ProblemCode::QueueFull,
                 format!("{depth} jobs are queued or running, the capacity; retry after a while"),
                 retry_after.as_secs(),
             ),
@@ -184,7 +186,7 @@ pub(crate) async fn list_jobs(
 ) -> Result<Json<JobListJson>, ApiError> {
     let Query(params) = params.map_err(|e| {
         ApiError::bad_request(
-            "invalid_query",
+            ProblemCode::InvalidQuery,
             format!(
                 "{}; the parameters are status, cursor and limit",
                 e.body_text()
@@ -195,7 +197,7 @@ pub(crate) async fn list_jobs(
         None => None,
         Some(s) => Some(JobStatus::parse(s).ok_or_else(|| {
             ApiError::bad_request(
-                "invalid_status",
+                ProblemCode::InvalidStatus,
                 format!(
                     "`{s}` is not a status; use queued, running, succeeded, failed or cancelled"
                 ),
@@ -205,7 +207,7 @@ pub(crate) async fn list_jobs(
     let limit = params.limit.unwrap_or(20);
     if !(1..=100).contains(&limit) {
         return Err(ApiError::bad_request(
-            "invalid_limit",
+            ProblemCode::InvalidLimit,
             format!("limit {limit} is out of range; use 1 to 100"),
         ));
     }
@@ -217,7 +219,7 @@ pub(crate) async fn list_jobs(
                 .filter(|n| *n > 0)
                 .ok_or_else(|| {
                     ApiError::bad_request(
-                        "invalid_cursor",
+                        ProblemCode::InvalidCursor,
                         "the cursor is not one this service gave; pass `next_cursor` of the \
                          previous page unchanged",
                     )
@@ -287,7 +289,7 @@ async fn artifact(
             };
             Err(ApiError::new(
                 StatusCode::CONFLICT,
-                "result_not_ready",
+                ProblemCode::ResultNotReady,
                 detail,
             ))
         }
@@ -316,7 +318,7 @@ pub(crate) async fn get_result(
 ) -> Result<Response, ApiError> {
     let Query(params) = params.map_err(|e| {
         ApiError::bad_request(
-            "invalid_query",
+            ProblemCode::InvalidQuery,
             format!("{}; the only parameter is format=glb|gltf", e.body_text()),
         )
     })?;
@@ -329,7 +331,7 @@ pub(crate) async fn get_result(
         Some("glb") => false,
         Some(other) => {
             return Err(ApiError::bad_request(
-                "invalid_format",
+                ProblemCode::InvalidFormat,
                 format!("`{other}` is not a result format; use glb or gltf"),
             ))
         }
@@ -473,13 +475,18 @@ pub(crate) async fn healthz() -> Json<serde_json::Value> {
 pub(crate) async fn readyz(State(state): State<AppState>) -> Result<Response, ApiError> {
     if state.is_shutting_down() {
         return Err(ApiError::unavailable(
-            "shutting_down",
+            ProblemCode::ShuttingDown,
             "the service is shutting down",
             5,
         ));
     }
     state.jobs.ready().await.map_err(|e| {
-        ApiError::unavailable("store_unavailable", "the job store does not answer", 5).with_cause(e)
+        ApiError::unavailable(
+            ProblemCode::StoreUnavailable,
+            "the job store does not answer",
+            5,
+        )
+        .with_cause(e)
     })?;
     Ok(Json(serde_json::json!({ "status": "ready" })).into_response())
 }
@@ -491,7 +498,7 @@ pub(crate) async fn metrics(State(state): State<AppState>) -> Result<Response, A
     let mut r = text.into_response();
     r.headers_mut().insert(
         header::CONTENT_TYPE,
-        HeaderValue::from_static("text/plain; version=0.0.4; charset=utf-8"),
+        HeaderValue::from_static(crate::jobs::METRICS_CONTENT_TYPE),
     );
     Ok(r)
 }
@@ -513,7 +520,7 @@ pub(crate) async fn openapi() -> Response {
 pub(crate) async fn not_found() -> ApiError {
     ApiError::new(
         StatusCode::NOT_FOUND,
-        "route_not_found",
+        ProblemCode::RouteNotFound,
         "no such endpoint; GET /openapi.json lists them",
     )
 }
@@ -522,7 +529,7 @@ pub(crate) async fn not_found() -> ApiError {
 pub(crate) async fn method_not_allowed() -> ApiError {
     ApiError::new(
         StatusCode::METHOD_NOT_ALLOWED,
-        "method_not_allowed",
+        ProblemCode::MethodNotAllowed,
         "this endpoint does not take that method; GET /openapi.json lists them",
     )
 }

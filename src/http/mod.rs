@@ -6,10 +6,13 @@
 //!
 //! # Invariants
 //! - Every error is an [`ApiError`] → `application/problem+json` with a stable `code`.
-//! - Handlers never log. The `log_requests` middleware gives every request an id (the
-//!   client's `x-request-id` when it is sane, else a new UUID), runs it in a `request` span
-//!   (`request_id`, `method`, `route`, and `job_id` once a handler knows it), logs one line per
-//!   request, records the latency metric and echoes `x-request-id`.
+//! - Handlers never log. Every request gets an id: the client's `x-request-id` when it is 1 to
+//!   64 of `[A-Za-z0-9._-]`, else a new UUIDv7 (tower-http `SetRequestId`, after
+//!   [`drop_unusable_request_id`]); it is echoed in the response's `x-request-id`
+//!   (`PropagateRequestId`) and in every problem body. tower-http's `TraceLayer` runs the request
+//!   in a `request` span (`request_id`, `method`, `route`, and `job_id` once a handler knows it)
+//!   and logs one line per response with its status and latency (`ms`), at `error` with the
+//!   logged cause of a 500. The `request_context` middleware records the latency metric.
 //! - Memory per request is bounded: uploads stream to spool files (`upload.rs`), results are
 //!   read whole from the blob store (bounded by what an upload may produce).
 //! - A request refused before its body was read gets its answer, not a TCP reset: the
@@ -22,7 +25,7 @@ mod handlers;
 mod upload;
 
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use axum::extract::{DefaultBodyLimit, MatchedPath, Request, State};
 use axum::http::{HeaderName, HeaderValue, Method};
@@ -32,7 +35,10 @@ use axum::routing::get;
 use axum::Router;
 use tokio::sync::watch;
 use tower_http::cors::{AllowOrigin, CorsLayer};
-use tracing::Instrument as _;
+use tower_http::request_id::{
+    MakeRequestId, PropagateRequestIdLayer, RequestId, SetRequestIdLayer,
+};
+use tower_http::trace::TraceLayer;
 
 pub use auth::Owner;
 pub use error::ApiError;
@@ -119,7 +125,20 @@ pub fn router(
         .layer(DefaultBodyLimit::disable())
         // A refused upload's unread bytes are drained so the refusal reaches the client.
         .layer(middleware::from_fn(drain::drain_unread_bodies))
-        .layer(middleware::from_fn_with_state(state.clone(), log_requests))
+        .layer(middleware::from_fn_with_state(
+            state.clone(),
+            request_context,
+        ))
+        .layer(
+            TraceLayer::new_for_http()
+                .make_span_with(request_span)
+                .on_request(())
+                .on_response(log_response)
+                .on_failure(()),
+        )
+        .layer(PropagateRequestIdLayer::x_request_id())
+        .layer(SetRequestIdLayer::x_request_id(NewRequestId))
+        .layer(middleware::map_request(drop_unusable_request_id))
         .with_state(state.clone());
     if let Some(cors) = cors_layer(&state.config.cors_origins) {
         app = app.layer(cors);
@@ -169,52 +188,70 @@ fn cors_layer(origins: &[String]) -> Option<CorsLayer> {
     )
 }
 
-/// The request id: the client's when it is 1..=64 of `[A-Za-z0-9._-]`, else a new UUIDv7.
-fn request_id(req: &Request) -> String {
-    req.headers()
+/// Removes a client's `x-request-id` unless it is 1 to 64 of `[A-Za-z0-9._-]`, so that
+/// `SetRequestId` (which keeps any id a request brings) gives such a request a new one: an id
+/// goes into logs and headers, so it must be short and plain.
+async fn drop_unusable_request_id(mut req: Request) -> Request {
+    let usable = req
+        .headers()
         .get("x-request-id")
-        .and_then(|v| v.to_str().ok())
-        .filter(|s| {
-            !s.is_empty()
-                && s.len() <= 64
-                && s.bytes()
+        .map(|v| {
+            let b = v.as_bytes();
+            !b.is_empty()
+                && b.len() <= 64
+                && b.iter()
                     .all(|b| b.is_ascii_alphanumeric() || matches!(b, b'.' | b'_' | b'-'))
         })
-        .map(str::to_string)
-        .unwrap_or_else(|| uuid::Uuid::now_v7().to_string())
+        .unwrap_or(true);
+    if !usable {
+        req.headers_mut().remove("x-request-id");
+    }
+    req
 }
 
-/// Middleware: request id, span, one log line, latency metric (module doc).
-async fn log_requests(State(state): State<AppState>, req: Request, next: Next) -> Response {
-    let started = Instant::now();
-    let id = request_id(&req);
-    let method = req.method().clone();
-    let route = req
-        .extensions()
-        .get::<MatchedPath>()
-        .map(|p| p.as_str().to_string())
-        .unwrap_or_else(|| "unmatched".to_string());
-    let span = tracing::info_span!(
-        "request",
-        request_id = %id,
-        method = %method,
-        route = %route,
-        job_id = tracing::field::Empty,
-    );
-    let mut response = error::REQUEST_ID
-        .scope(id.clone(), next.run(req).instrument(span.clone()))
-        .await;
-    let status = response.status();
-    let seconds = started.elapsed().as_secs_f64();
-    state
-        .jobs
-        .metrics()
-        .observe_http(method.as_str(), &route, status.as_u16(), seconds);
-    if let Ok(v) = HeaderValue::from_str(&id) {
-        response.headers_mut().insert("x-request-id", v);
+/// A new request id: a UUIDv7 (time-ordered, so ids sort like the log).
+#[derive(Debug, Clone, Copy)]
+struct NewRequestId;
+
+impl MakeRequestId for NewRequestId {
+    fn make_request_id<B>(&mut self, _: &axum::http::Request<B>) -> Option<RequestId> {
+        HeaderValue::from_str(&uuid::Uuid::now_v7().to_string())
+            .ok()
+            .map(RequestId::new)
     }
-    let _entered = span.enter();
-    let ms = seconds * 1000.0;
+}
+
+/// The request's id (set by `SetRequestId`), `""` if it has none.
+fn id_of(req: &Request) -> &str {
+    req.extensions()
+        .get::<RequestId>()
+        .and_then(|id| id.header_value().to_str().ok())
+        .unwrap_or("")
+}
+
+/// The matched route template (bounded cardinality), `unmatched` for the fallback.
+fn route_of(req: &Request) -> &str {
+    req.extensions()
+        .get::<MatchedPath>()
+        .map(MatchedPath::as_str)
+        .unwrap_or("unmatched")
+}
+
+/// The `request` span of `TraceLayer` (module doc).
+fn request_span(req: &Request) -> tracing::Span {
+    tracing::info_span!(
+        "request",
+        request_id = %id_of(req),
+        method = %req.method(),
+        route = %route_of(req),
+        job_id = tracing::field::Empty,
+    )
+}
+
+/// The one log line per request of `TraceLayer`, inside the request span.
+fn log_response(response: &Response, latency: Duration, _span: &tracing::Span) {
+    let status = response.status();
+    let ms = latency.as_secs_f64() * 1000.0;
     match response.extensions().get::<error::InternalCause>() {
         Some(cause) => {
             tracing::error!(status = status.as_u16(), ms, cause = %cause.0, "request failed")
@@ -224,5 +261,50 @@ async fn log_requests(State(state): State<AppState>, req: Request, next: Next) -
         }
         None => tracing::info!(status = status.as_u16(), ms, "request"),
     }
+}
+
+/// Middleware: makes the request id known to [`ApiError`]'s problem bodies and records the
+/// latency metric by method, route and status.
+async fn request_context(State(state): State<AppState>, req: Request, next: Next) -> Response {
+    let started = Instant::now();
+    let id = id_of(&req).to_string();
+    let method = req.method().clone();
+    let route = route_of(&req).to_string();
+    let response = error::REQUEST_ID.scope(id, next.run(req)).await;
+    state.jobs.metrics().observe_http(
+        method.as_str(),
+        &route,
+        response.status().as_u16(),
+        started.elapsed().as_secs_f64(),
+    );
     response
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    async fn kept(id: &str) -> Option<String> {
+        let req = Request::builder()
+            .header("x-request-id", id)
+            .body(axum::body::Body::empty())
+            .unwrap();
+        drop_unusable_request_id(req)
+            .await
+            .headers()
+            .get("x-request-id")
+            .map(|v| v.to_str().unwrap().to_string())
+    }
+
+    #[tokio::test]
+    async fn only_short_plain_client_request_ids_are_kept() {
+        for id in ["abc-123", "A.b_C-9", &"x".repeat(64)] {
+            assert_eq!(kept(id).await.as_deref(), Some(id), "{id}");
+        }
+        for id in ["", "with space", "semi;colon", "a/b", &"x".repeat(65)] {
+            assert_eq!(kept(id).await, None, "{id:?}");
+        }
+        let none = Request::builder().body(axum::body::Body::empty()).unwrap();
+        assert!(drop_unusable_request_id(none).await.headers().is_empty());
+    }
 }

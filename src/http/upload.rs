@@ -18,7 +18,7 @@ use futures_util::StreamExt as _;
 use tokio::io::AsyncWriteExt as _;
 
 use super::error::ApiError;
-use crate::api::OptionsJson;
+use crate::api::{OptionsJson, ProblemCode};
 use crate::jobs::{JobService, SpooledPart};
 
 /// Largest `options` part or query string, bytes.
@@ -46,7 +46,7 @@ async fn within<T>(
         .map_err(|_| {
             ApiError::new(
                 axum::http::StatusCode::REQUEST_TIMEOUT,
-                "upload_stalled",
+                ProblemCode::UploadStalled,
                 format!(
                     "no bytes of the upload arrived for {:.1} s, so it was dropped; check the \
                      connection and send it again",
@@ -66,7 +66,7 @@ pub(crate) struct Parsed {
 fn too_large(limit: u64) -> ApiError {
     ApiError::new(
         axum::http::StatusCode::PAYLOAD_TOO_LARGE,
-        "upload_too_large",
+        ProblemCode::UploadTooLarge,
         format!(
             "the upload is larger than this service's limit of {limit} bytes; simplify or split \
              the asset, or ask the operator to raise --max-upload-bytes"
@@ -95,7 +95,7 @@ where
     while let Some(chunk) = within(limits, chunks.next()).await? {
         let chunk = chunk.map_err(|e| {
             ApiError::bad_request(
-                "upload_interrupted",
+                ProblemCode::UploadInterrupted,
                 format!("the request body could not be read ({e}); send it again"),
             )
         })?;
@@ -129,17 +129,17 @@ pub(crate) fn options_from_query(query: Option<&str>) -> Result<OptionsJson, Api
     };
     if query.len() > MAX_OPTIONS_BYTES {
         return Err(ApiError::bad_request(
-            "invalid_options",
+            ProblemCode::InvalidOptions,
             "the query string is too long",
         ));
     }
-    let pairs: Vec<(String, String)> =
-        serde_urlencoded_pairs(query).map_err(|d| ApiError::bad_request("invalid_options", d))?;
+    let pairs: Vec<(String, String)> = serde_urlencoded_pairs(query)
+        .map_err(|d| ApiError::bad_request(ProblemCode::InvalidOptions, d))?;
     let mut map = serde_json::Map::new();
     for (k, v) in pairs {
         if map.contains_key(&k) {
             return Err(ApiError::bad_request(
-                "invalid_options",
+                ProblemCode::InvalidOptions,
                 format!("the option `{k}` is given twice; give it once"),
             ));
         }
@@ -194,7 +194,7 @@ fn serde_urlencoded_pairs(query: &str) -> Result<Vec<(String, String)>, String> 
 fn parse_options(value: serde_json::Value) -> Result<OptionsJson, ApiError> {
     serde_json::from_value(value).map_err(|e| {
         ApiError::bad_request(
-            "invalid_options",
+            ProblemCode::InvalidOptions,
             format!(
                 "the options do not match proto/options.schema.json: {e}; see GET \
                  /openapi.json for the names and types"
@@ -247,7 +247,7 @@ pub(crate) async fn read_upload(
             .await?;
             if asset.size == 0 {
                 return Err(ApiError::bad_request(
-                    "empty_upload",
+                    ProblemCode::EmptyUpload,
                     "the request body is empty; send the asset's bytes",
                 ));
             }
@@ -260,7 +260,7 @@ pub(crate) async fn read_upload(
         "multipart/form-data" => read_multipart(jobs, req, &mut budget, limits).await,
         other => Err(ApiError::new(
             axum::http::StatusCode::UNSUPPORTED_MEDIA_TYPE,
-            "unsupported_media_type",
+            ProblemCode::UnsupportedMediaType,
             format!(
                 "`{}` is not an accepted Content-Type; send a GLB as `model/gltf-binary`, a \
                  .gltf with embedded buffers as `model/gltf+json`, or `multipart/form-data` \
@@ -282,7 +282,7 @@ async fn read_multipart(
     let mut options = options_from_query(req.uri().query())?;
     let mut multipart = Multipart::from_request(req, &()).await.map_err(|e| {
         ApiError::bad_request(
-            "invalid_multipart",
+            ProblemCode::InvalidMultipart,
             format!("the multipart body cannot be read: {e}"),
         )
     })?;
@@ -291,7 +291,7 @@ async fn read_multipart(
             too_large(limit)
         } else {
             ApiError::bad_request(
-                "invalid_multipart",
+                ProblemCode::InvalidMultipart,
                 format!("the multipart body cannot be read: {e}"),
             )
         }
@@ -304,7 +304,7 @@ async fn read_multipart(
         parts += 1;
         if parts > MAX_PARTS {
             return Err(ApiError::bad_request(
-                "too_many_parts",
+                ProblemCode::TooManyParts,
                 format!("a multipart upload has at most {MAX_PARTS} parts"),
             ));
         }
@@ -313,7 +313,7 @@ async fn read_multipart(
         if name == "options" {
             if saw_options || query_options {
                 return Err(ApiError::bad_request(
-                    "invalid_options",
+                    ProblemCode::InvalidOptions,
                     "options are given twice; send one `options` part or query parameters",
                 ));
             }
@@ -322,7 +322,7 @@ async fn read_multipart(
             while let Some(chunk) = within(limits, field.chunk()).await?.map_err(bad)? {
                 if text.len() + chunk.len() > MAX_OPTIONS_BYTES {
                     return Err(ApiError::bad_request(
-                        "invalid_options",
+                        ProblemCode::InvalidOptions,
                         format!("the `options` part is larger than {MAX_OPTIONS_BYTES} bytes"),
                     ));
                 }
@@ -330,7 +330,7 @@ async fn read_multipart(
             }
             let value: serde_json::Value = serde_json::from_slice(&text).map_err(|e| {
                 ApiError::bad_request(
-                    "invalid_options",
+                    ProblemCode::InvalidOptions,
                     format!("the `options` part is not JSON: {e}"),
                 )
             })?;
@@ -344,7 +344,7 @@ async fn read_multipart(
         if name == "asset" {
             if asset.is_some() {
                 return Err(ApiError::bad_request(
-                    "invalid_multipart",
+                    ProblemCode::InvalidMultipart,
                     "more than one `asset` part; send exactly one",
                 ));
             }
@@ -355,7 +355,7 @@ async fn read_multipart(
             let uri = file_name.filter(|f| !f.is_empty()).unwrap_or(name);
             if uri.is_empty() {
                 return Err(ApiError::bad_request(
-                    "invalid_multipart",
+                    ProblemCode::InvalidMultipart,
                     "a part has neither a name nor a file name; name resource parts by the URI \
                      the .gltf uses for them",
                 ));
@@ -366,7 +366,7 @@ async fn read_multipart(
     }
     let Some(asset) = asset else {
         return Err(ApiError::bad_request(
-            "missing_asset",
+            ProblemCode::MissingAsset,
             "the multipart body has no `asset` part; send the .glb or .gltf as a part named \
              `asset`",
         ));

@@ -1,17 +1,25 @@
-//! Process metrics in the Prometheus text exposition format (version 0.0.4), kept by hand:
-//! a few counters and fixed-bucket histograms behind one mutex, so no exporter crate (and its
-//! TLS stack) is needed.
+//! Process metrics for `GET /metrics`, kept in a `prometheus-client` registry and written in
+//! the Prometheus text exposition format (version 0.0.4, [`CONTENT_TYPE`]).
 //!
 //! Series: `texatlas_jobs{state}` and `texatlas_queue_depth` (gauges read from the store at
 //! scrape time), `texatlas_stage_duration_seconds{stage}`, `texatlas_job_duration_seconds`,
 //! `texatlas_jobs_finished_total{outcome}`, `texatlas_triangles_processed_total`,
 //! `texatlas_http_request_duration_seconds{method,route,status}`.
-use std::collections::BTreeMap;
-use std::fmt::Write as _;
-use std::sync::Mutex;
+//!
+//! Invariant: label values have bounded cardinality: `route` is the matched route template
+//! (`/v1/jobs/{id}`, or `unmatched`), never the raw path.
+use prometheus_client::encoding::{prometheus_text, EncodeLabelSet};
+use prometheus_client::metrics::counter::Counter;
+use prometheus_client::metrics::family::Family;
+use prometheus_client::metrics::gauge::Gauge;
+use prometheus_client::metrics::histogram::Histogram;
+use prometheus_client::registry::Registry;
 
 use crate::atlas::Stage;
 use crate::storage::JobStatus;
+
+/// The `Content-Type` of [`Metrics::render`]'s text.
+pub const CONTENT_TYPE: &str = prometheus_text::CONTENT_TYPE;
 
 /// Upper bounds of the HTTP latency buckets, seconds.
 const HTTP_BUCKETS_S: &[f64] = &[
@@ -22,163 +30,169 @@ const WORK_BUCKETS_S: &[f64] = &[
     0.01, 0.05, 0.1, 0.5, 1.0, 5.0, 10.0, 30.0, 60.0, 300.0, 1800.0,
 ];
 
-#[derive(Debug, Clone, Default)]
-struct Histogram {
-    counts: Vec<u64>,
-    sum: f64,
-    count: u64,
+#[derive(Debug, Clone, PartialEq, Eq, Hash, EncodeLabelSet)]
+struct StateLabel {
+    state: &'static str,
 }
 
-impl Histogram {
-    fn observe(&mut self, buckets: &[f64], v: f64) {
-        if self.counts.is_empty() {
-            self.counts = vec![0; buckets.len()];
-        }
-        for (i, b) in buckets.iter().enumerate() {
-            if v <= *b {
-                self.counts[i] += 1;
-            }
-        }
-        self.sum += v;
-        self.count += 1;
-    }
-
-    fn render(&self, out: &mut String, name: &str, labels: &str, buckets: &[f64]) {
-        let sep = if labels.is_empty() { "" } else { "," };
-        for (i, b) in buckets.iter().enumerate() {
-            let c = self.counts.get(i).copied().unwrap_or(0);
-            let _ = writeln!(out, "{name}_bucket{{{labels}{sep}le=\"{b}\"}} {c}");
-        }
-        let _ = writeln!(
-            out,
-            "{name}_bucket{{{labels}{sep}le=\"+Inf\"}} {}",
-            self.count
-        );
-        let braces = if labels.is_empty() {
-            String::new()
-        } else {
-            format!("{{{labels}}}")
-        };
-        let _ = writeln!(out, "{name}_sum{braces} {}", self.sum);
-        let _ = writeln!(out, "{name}_count{braces} {}", self.count);
-    }
+#[derive(Debug, Clone, PartialEq, Eq, Hash, EncodeLabelSet)]
+struct OutcomeLabel {
+    outcome: &'static str,
 }
 
-#[derive(Debug, Default)]
-struct Inner {
-    stage: BTreeMap<&'static str, Histogram>,
-    job: Histogram,
-    finished: BTreeMap<&'static str, u64>,
-    triangles: u64,
-    http: BTreeMap<(String, String, u16), Histogram>,
+#[derive(Debug, Clone, PartialEq, Eq, Hash, EncodeLabelSet)]
+struct StageLabel {
+    stage: &'static str,
 }
 
-/// The metrics of one process.
-#[derive(Debug, Default)]
+#[derive(Debug, Clone, PartialEq, Eq, Hash, EncodeLabelSet)]
+struct HttpLabels {
+    method: String,
+    route: String,
+    status: u16,
+}
+
+type HistogramFamily<L> = Family<L, Histogram, fn() -> Histogram>;
+
+fn http_histogram() -> Histogram {
+    Histogram::new(HTTP_BUCKETS_S.iter().copied())
+}
+
+fn work_histogram() -> Histogram {
+    Histogram::new(WORK_BUCKETS_S.iter().copied())
+}
+
+/// The metrics of one process. The metric handles share their values with the registry.
+#[derive(Debug)]
 pub struct Metrics {
-    inner: Mutex<Inner>,
+    registry: Registry,
+    jobs: Family<StateLabel, Gauge>,
+    queue_depth: Gauge,
+    finished: Family<OutcomeLabel, Counter>,
+    triangles: Counter,
+    stage: HistogramFamily<StageLabel>,
+    job: Histogram,
+    http: HistogramFamily<HttpLabels>,
 }
 
-fn escape(v: &str) -> String {
-    v.replace('\\', "\\\\")
-        .replace('"', "\\\"")
-        .replace('\n', "\\n")
-}
-
-impl Metrics {
-    fn lock(&self) -> std::sync::MutexGuard<'_, Inner> {
-        self.inner.lock().unwrap_or_else(|p| p.into_inner())
-    }
-
-    /// One HTTP request: `route` is the matched route template (bounded cardinality).
-    pub fn observe_http(&self, method: &str, route: &str, status: u16, seconds: f64) {
-        self.lock()
-            .http
-            .entry((method.to_string(), route.to_string(), status))
-            .or_default()
-            .observe(HTTP_BUCKETS_S, seconds);
-    }
-
-    /// A job reached a terminal state (`outcome` = its status name).
-    pub(crate) fn job_finished(&self, outcome: JobStatus, seconds: Option<f64>) {
-        let mut m = self.lock();
-        *m.finished.entry(outcome.as_str()).or_default() += 1;
-        if let Some(s) = seconds {
-            m.job.observe(WORK_BUCKETS_S, s);
-        }
-    }
-
-    /// A job succeeded with these stage durations and triangles.
-    pub(crate) fn job_succeeded(&self, triangles: u64, stage_seconds: &[f64; 4]) {
-        let mut m = self.lock();
-        m.triangles += triangles;
-        for (stage, s) in Stage::ALL.iter().zip(stage_seconds) {
-            m.stage
-                .entry(stage.name())
-                .or_default()
-                .observe(WORK_BUCKETS_S, *s);
-        }
-    }
-
-    /// The exposition text; `counts` are the jobs per status ([`JobStatus::ALL`] order).
-    pub fn render(&self, counts: &[u64; 5]) -> String {
-        let m = self.lock();
-        let mut out = String::new();
-        out.push_str(
-            "# HELP texatlas_jobs Jobs in the store by state.\n# TYPE texatlas_jobs gauge\n",
-        );
-        for (s, n) in JobStatus::ALL.iter().zip(counts) {
-            let _ = writeln!(out, "texatlas_jobs{{state=\"{}\"}} {n}", s.as_str());
-        }
-        out.push_str("# HELP texatlas_queue_depth Jobs waiting for a worker.\n# TYPE texatlas_queue_depth gauge\n");
-        let _ = writeln!(out, "texatlas_queue_depth {}", counts[0]);
-        out.push_str("# HELP texatlas_jobs_finished_total Jobs that reached a terminal state in this process.\n# TYPE texatlas_jobs_finished_total counter\n");
+impl Default for Metrics {
+    fn default() -> Self {
+        let m = Metrics {
+            registry: Registry::default(),
+            jobs: Family::default(),
+            queue_depth: Gauge::default(),
+            finished: Family::default(),
+            triangles: Counter::default(),
+            stage: Family::new_with_constructor(work_histogram),
+            job: work_histogram(),
+            http: Family::new_with_constructor(http_histogram),
+        };
+        // Series that exist from the start (0 until something happens), as a dashboard expects.
         for s in [
             JobStatus::Succeeded,
             JobStatus::Failed,
             JobStatus::Cancelled,
         ] {
-            let n = m.finished.get(s.as_str()).copied().unwrap_or(0);
-            let _ = writeln!(
-                out,
-                "texatlas_jobs_finished_total{{outcome=\"{}\"}} {n}",
-                s.as_str()
-            );
+            drop(m.finished.get_or_create(&OutcomeLabel {
+                outcome: s.as_str(),
+            }));
         }
-        out.push_str("# HELP texatlas_triangles_processed_total Triangles of succeeded jobs.\n# TYPE texatlas_triangles_processed_total counter\n");
-        let _ = writeln!(out, "texatlas_triangles_processed_total {}", m.triangles);
-        out.push_str("# HELP texatlas_stage_duration_seconds Wall-clock time per pipeline stage.\n# TYPE texatlas_stage_duration_seconds histogram\n");
         for stage in Stage::ALL {
-            let h = m.stage.get(stage.name()).cloned().unwrap_or_default();
-            let labels = format!("stage=\"{}\"", stage.name());
-            h.render(
-                &mut out,
-                "texatlas_stage_duration_seconds",
-                &labels,
-                WORK_BUCKETS_S,
-            );
+            drop(m.stage.get_or_create(&StageLabel {
+                stage: stage.name(),
+            }));
         }
-        out.push_str("# HELP texatlas_job_duration_seconds Wall-clock time of a job's last attempt.\n# TYPE texatlas_job_duration_seconds histogram\n");
-        m.job.render(
-            &mut out,
-            "texatlas_job_duration_seconds",
-            "",
-            WORK_BUCKETS_S,
+        let mut m = m;
+        // The help texts get a final `.` from the encoder.
+        let r = &mut m.registry;
+        r.register(
+            "texatlas_jobs",
+            "Jobs in the store by state",
+            m.jobs.clone(),
         );
-        out.push_str("# HELP texatlas_http_request_duration_seconds HTTP latency by route and status.\n# TYPE texatlas_http_request_duration_seconds histogram\n");
-        for ((method, route, status), h) in &m.http {
-            let labels = format!(
-                "method=\"{}\",route=\"{}\",status=\"{status}\"",
-                escape(method),
-                escape(route)
-            );
-            h.render(
-                &mut out,
-                "texatlas_http_request_duration_seconds",
-                &labels,
-                HTTP_BUCKETS_S,
-            );
+        r.register(
+            "texatlas_queue_depth",
+            "Jobs waiting for a worker",
+            m.queue_depth.clone(),
+        );
+        r.register(
+            "texatlas_jobs_finished",
+            "Jobs that reached a terminal state in this process",
+            m.finished.clone(),
+        );
+        r.register(
+            "texatlas_triangles_processed",
+            "Triangles of succeeded jobs",
+            m.triangles.clone(),
+        );
+        r.register(
+            "texatlas_stage_duration_seconds",
+            "Wall-clock time per pipeline stage",
+            m.stage.clone(),
+        );
+        r.register(
+            "texatlas_job_duration_seconds",
+            "Wall-clock time of a job's last attempt",
+            m.job.clone(),
+        );
+        r.register(
+            "texatlas_http_request_duration_seconds",
+            "HTTP latency by route and status",
+            m.http.clone(),
+        );
+        m
+    }
+}
+
+impl Metrics {
+    /// One HTTP request: `route` is the matched route template (bounded cardinality).
+    pub fn observe_http(&self, method: &str, route: &str, status: u16, seconds: f64) {
+        self.http
+            .get_or_create(&HttpLabels {
+                method: method.to_string(),
+                route: route.to_string(),
+                status,
+            })
+            .observe(seconds);
+    }
+
+    /// A job reached a terminal state (`outcome` = its status name).
+    pub(crate) fn job_finished(&self, outcome: JobStatus, seconds: Option<f64>) {
+        self.finished
+            .get_or_create(&OutcomeLabel {
+                outcome: outcome.as_str(),
+            })
+            .inc();
+        if let Some(s) = seconds {
+            self.job.observe(s);
         }
+    }
+
+    /// A job succeeded with these stage durations and triangles.
+    pub(crate) fn job_succeeded(&self, triangles: u64, stage_seconds: &[f64; 4]) {
+        self.triangles.inc_by(triangles);
+        for (stage, s) in Stage::ALL.iter().zip(stage_seconds) {
+            self.stage
+                .get_or_create(&StageLabel {
+                    stage: stage.name(),
+                })
+                .observe(*s);
+        }
+    }
+
+    /// The exposition text ([`CONTENT_TYPE`]); `counts` are the jobs per status
+    /// ([`JobStatus::ALL`] order).
+    pub fn render(&self, counts: &[u64; 5]) -> String {
+        let gauge = |n: u64| i64::try_from(n).unwrap_or(i64::MAX);
+        for (s, n) in JobStatus::ALL.iter().zip(counts) {
+            self.jobs
+                .get_or_create(&StateLabel { state: s.as_str() })
+                .set(gauge(*n));
+        }
+        self.queue_depth.set(gauge(counts[0]));
+        let mut out = String::new();
+        // Writing into a String cannot fail.
+        let _ = prometheus_text::encode(&mut out, &self.registry);
         out
     }
 }
@@ -197,15 +211,48 @@ mod tests {
         let text = m.render(&[3, 1, 2, 0, 0]);
         for line in [
             "texatlas_jobs{state=\"queued\"} 3",
+            "texatlas_jobs{state=\"cancelled\"} 0",
             "texatlas_queue_depth 3",
             "texatlas_triangles_processed_total 12",
             "texatlas_jobs_finished_total{outcome=\"succeeded\"} 1",
+            "texatlas_jobs_finished_total{outcome=\"failed\"} 0",
             "texatlas_stage_duration_seconds_count{stage=\"pack\"} 1",
+            "texatlas_stage_duration_seconds_bucket{stage=\"pack\",le=\"0.5\"} 1",
+            "texatlas_stage_duration_seconds_bucket{stage=\"pack\",le=\"0.1\"} 0",
+            "texatlas_http_request_duration_seconds_bucket{method=\"GET\",route=\"/v1/jobs/{id}\",status=\"200\",le=\"0.0005\"} 0",
             "texatlas_http_request_duration_seconds_bucket{method=\"GET\",route=\"/v1/jobs/{id}\",status=\"200\",le=\"0.0025\"} 1",
             "texatlas_http_request_duration_seconds_bucket{method=\"GET\",route=\"/v1/jobs/{id}\",status=\"200\",le=\"+Inf\"} 2",
+            "texatlas_http_request_duration_seconds_count{method=\"GET\",route=\"/v1/jobs/{id}\",status=\"200\"} 2",
             "texatlas_job_duration_seconds_count 1",
+            "texatlas_job_duration_seconds_bucket{le=\"1800\"} 1",
+            // Names, types and help as before the registry (the exposition is the contract).
+            "# HELP texatlas_jobs Jobs in the store by state.",
+            "# TYPE texatlas_jobs gauge",
+            "# TYPE texatlas_queue_depth gauge",
+            "# HELP texatlas_jobs_finished_total Jobs that reached a terminal state in this process.",
+            "# TYPE texatlas_jobs_finished_total counter",
+            "# TYPE texatlas_triangles_processed_total counter",
+            "# HELP texatlas_stage_duration_seconds Wall-clock time per pipeline stage.",
+            "# TYPE texatlas_stage_duration_seconds histogram",
+            "# TYPE texatlas_job_duration_seconds histogram",
+            "# HELP texatlas_http_request_duration_seconds HTTP latency by route and status.",
+            "# TYPE texatlas_http_request_duration_seconds histogram",
         ] {
             assert!(text.lines().any(|l| l == line), "missing `{line}` in\n{text}");
         }
+        // The sum is the sum of the observations.
+        let sum = text
+            .lines()
+            .find_map(|l| l.strip_prefix("texatlas_http_request_duration_seconds_sum{method=\"GET\",route=\"/v1/jobs/{id}\",status=\"200\"} "))
+            .expect("http sum");
+        assert!((sum.parse::<f64>().unwrap() - 0.022).abs() < 1e-12, "{sum}");
+    }
+
+    #[test]
+    fn label_values_are_escaped() {
+        let m = Metrics::default();
+        m.observe_http("GET", "a\"b\\c", 404, 0.1);
+        let text = m.render(&[0; 5]);
+        assert!(text.contains(r#"route="a\"b\\c",status="404""#), "{text}");
     }
 }

@@ -35,7 +35,7 @@ mod progress;
 mod service;
 mod worker;
 
-pub use metrics::Metrics;
+pub use metrics::{Metrics, CONTENT_TYPE as METRICS_CONTENT_TYPE};
 pub use processor::{JobFailure, JobInput, JobOutput, Processor, UnwrapProcessor};
 pub use service::{
     Artifact, ArtifactOutcome, DeleteOutcome, JobService, JobsConfig, SpooledPart, SubmitError,

@@ -1,5 +1,5 @@
 //! The work of one job: [`Processor`], and the production one, [`UnwrapProcessor`].
-use crate::api::{ApiProblemJson, AssetDefectJson, OptionsJson};
+use crate::api::{ApiProblemJson, AssetDefectJson, OptionsJson, ProblemCode};
 use crate::atlas::Progress;
 use crate::gltf_io::{self, DecodeLimits, EncodeOptions, OutputFormat, Resources};
 use crate::preview::{preview_size_px, render_preview};
@@ -35,8 +35,8 @@ pub struct JobOutput {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{code}: {detail}")]
 pub struct JobFailure {
-    /// Stable snake_case code (`cancelled` for a cooperative stop).
-    pub code: String,
+    /// The stable code ([`ProblemCode::Cancelled`] for a cooperative stop).
+    pub code: ProblemCode,
     /// What is wrong and how to fix it.
     pub detail: String,
     /// Defects of the asset, with JSON paths.
@@ -47,9 +47,9 @@ pub struct JobFailure {
 
 impl JobFailure {
     /// A failure caused by the input or the options (status 422).
-    pub fn input(code: &str, detail: impl Into<String>) -> JobFailure {
+    pub fn input(code: ProblemCode, detail: impl Into<String>) -> JobFailure {
         JobFailure {
-            code: code.to_string(),
+            code,
             detail: detail.into(),
             defects: Vec::new(),
             internal: false,
@@ -57,7 +57,7 @@ impl JobFailure {
     }
 
     /// A fault of the service (status 500).
-    pub fn internal(code: &str, detail: impl Into<String>) -> JobFailure {
+    pub fn internal(code: ProblemCode, detail: impl Into<String>) -> JobFailure {
         JobFailure {
             internal: true,
             ..JobFailure::input(code, detail)
@@ -66,7 +66,7 @@ impl JobFailure {
 
     /// The cooperative stop.
     pub fn cancelled() -> JobFailure {
-        JobFailure::input("cancelled", "the job was cancelled")
+        JobFailure::input(ProblemCode::Cancelled, "the job was cancelled")
     }
 
     /// The problem body stored as the job's `error`.
@@ -76,7 +76,7 @@ impl JobFailure {
         } else {
             (422, "The asset could not be unwrapped")
         };
-        let mut p = ApiProblemJson::new(status, &self.code, title, self.detail.clone());
+        let mut p = ApiProblemJson::new(status, self.code, title, self.detail.clone());
         p.defects = self.defects.clone();
         p
     }
@@ -111,11 +111,11 @@ impl Processor for UnwrapProcessor {
     ) -> Result<JobOutput, JobFailure> {
         let settings = options
             .to_settings()
-            .map_err(|e| JobFailure::input("invalid_option", e.to_string()))?;
+            .map_err(|e| JobFailure::input(ProblemCode::InvalidOption, e.to_string()))?;
         let asset = gltf_io::decode(&input.asset, &input.resources, &self.limits).map_err(|e| {
             JobFailure {
                 defects: vec![AssetDefectJson::from(&e)],
-                ..JobFailure::input(e.code.as_str(), e.to_string())
+                ..JobFailure::input(ProblemCode::from(&e), e.to_string())
             }
         })?;
         let unwrapped = unwrap_asset(&asset, &settings, progress).map_err(|e| match &e {
@@ -124,9 +124,9 @@ impl Processor for UnwrapProcessor {
             }
             UnwrapError::Encode(g) => JobFailure {
                 defects: vec![AssetDefectJson::from(g)],
-                ..JobFailure::input(e.code(), e.to_string())
+                ..JobFailure::input(ProblemCode::from(&e), e.to_string())
             },
-            _ => JobFailure::input(e.code(), e.to_string()),
+            _ => JobFailure::input(ProblemCode::from(&e), e.to_string()),
         })?;
         // The other container from the same UVs, so `GET …/result` can serve either.
         let other_format = match settings.format {
@@ -142,13 +142,13 @@ impl Processor for UnwrapProcessor {
                 ..EncodeOptions::default()
             },
         )
-        .map_err(|e| JobFailure::internal("encode_failed", e.to_string()))?;
+        .map_err(|e| JobFailure::internal(ProblemCode::EncodeFailed, e.to_string()))?;
         let (glb, gltf) = match settings.format {
             OutputFormat::Glb => (unwrapped.encoded.bytes, other.bytes),
             OutputFormat::Gltf => (other.bytes, unwrapped.encoded.bytes),
         };
         let report_json = serde_json::to_vec_pretty(&unwrapped.report)
-            .map_err(|e| JobFailure::internal("report_failed", e.to_string()))?;
+            .map_err(|e| JobFailure::internal(ProblemCode::ReportFailed, e.to_string()))?;
         let pack = &settings.atlas.pack;
         let (w, h) = preview_size_px(pack.width_texels, pack.height_texels);
         let preview_png = render_preview(&unwrapped.atlas, 0, w, h);

@@ -12,7 +12,7 @@ use tokio::sync::{watch, Notify};
 use super::metrics::Metrics;
 use super::now_ms;
 use super::processor::JobInput;
-use crate::api::{AssetDefectJson, OptionsJson};
+use crate::api::{AssetDefectJson, OptionsJson, ProblemCode};
 use crate::atlas::AtlasError;
 use crate::gltf_io::{self, DecodeLimits, Resources};
 use crate::storage::{
@@ -123,7 +123,7 @@ pub enum SubmitError {
     #[error("{code}: {detail}")]
     InvalidAsset {
         /// Stable code (the first defect's).
-        code: String,
+        code: ProblemCode,
         /// What is wrong.
         detail: String,
         /// Every defect, with JSON paths.
@@ -372,7 +372,7 @@ impl JobService {
         }
         // Decode now, so a bad asset is a 422 at once; the worker decodes again from the blobs.
         let invalid = |e: &gltf_io::GltfError| SubmitError::InvalidAsset {
-            code: e.code.as_str().to_string(),
+            code: ProblemCode::from(e),
             detail: e.to_string(),
             defects: vec![AssetDefectJson::from(e)],
         };
@@ -382,7 +382,7 @@ impl JobService {
         let triangles = asset.mesh_input().triangles.len() as u64;
         if triangles == 0 {
             return Err(SubmitError::InvalidAsset {
-                code: "zero_triangles".into(),
+                code: ProblemCode::ZeroTriangles,
                 detail: "the asset has no triangle primitive; give at least one mesh with \
                          triangles (points and lines cannot be unwrapped)"
                     .into(),

@@ -13,7 +13,7 @@ use super::now_ms;
 use super::processor::{JobFailure, JobOutput, Processor};
 use super::progress::{Bridge, SharedSnapshot};
 use super::service::{blocking, job_prefix, JobService, ResultManifest};
-use crate::api::OptionsJson;
+use crate::api::{OptionsJson, ProblemCode};
 use crate::storage::{BlobKey, Finish, JobRecord, JobStatus, StoreError};
 
 /// The workers and the sweeper of one process.
@@ -39,7 +39,7 @@ impl std::fmt::Debug for WorkerPool {
 /// The body of a failed job whose attempts ran out (its worker kept dying).
 fn exhausted_error() -> String {
     let failure = JobFailure::internal(
-        "attempts_exhausted",
+        ProblemCode::AttemptsExhausted,
         "the job's worker stopped (crash or restart) on every attempt; the job was not retried \
          again. Submit it again; if it keeps failing, report the asset",
     );
@@ -283,9 +283,9 @@ impl Worker {
             let _entered = span.enter();
             let input = svc
                 .load_input(&job2)
-                .map_err(|e| JobFailure::internal("input_missing", e))?;
+                .map_err(|e| JobFailure::internal(ProblemCode::InputMissing, e))?;
             let options: OptionsJson = serde_json::from_str(&job2.options_json)
-                .map_err(|e| JobFailure::internal("options_unreadable", e.to_string()))?;
+                .map_err(|e| JobFailure::internal(ProblemCode::OptionsUnreadable, e.to_string()))?;
             let mut bridge = Bridge {
                 cancel: flag,
                 snapshot,
@@ -301,7 +301,7 @@ impl Worker {
                         .or_else(|| payload.downcast_ref::<String>().cloned())
                         .unwrap_or_else(|| "unknown panic".to_string());
                     Err(JobFailure::internal(
-                        "worker_panicked",
+                        ProblemCode::WorkerPanicked,
                         format!("the pipeline panicked: {message}"),
                     ))
                 }
@@ -317,7 +317,7 @@ impl Worker {
         let mut abort = self.abort.clone();
         tokio::select! {
             r = &mut task => Outcome::Done(r.unwrap_or_else(|e| {
-                Err(JobFailure::internal("worker_panicked", format!("the job's task failed: {e}")))
+                Err(JobFailure::internal(ProblemCode::WorkerPanicked, format!("the job's task failed: {e}")))
             })),
             _ = time_limit => {
                 // The thread stops at its next checkpoint; the worker moves on now.
@@ -355,14 +355,16 @@ impl Worker {
                 return Ok(None);
             }
             Outcome::TimedOut(limit) => failed(JobFailure::internal(
-                "time_limit_exceeded",
+                ProblemCode::TimeLimitExceeded,
                 format!(
                     "the job ran longer than the per-job limit of {} s; split the asset or ask \
                      the operator to raise --job-time-limit",
                     limit.as_secs()
                 ),
             )),
-            Outcome::Done(Err(f)) if f.code == "cancelled" && cancel_requested => Finish::Cancelled,
+            Outcome::Done(Err(f)) if f.code == ProblemCode::Cancelled && cancel_requested => {
+                Finish::Cancelled
+            }
             Outcome::Done(Err(f)) => failed(f),
             Outcome::Done(Ok(out)) => {
                 let metrics: Arc<Metrics> = svc.metrics.clone();

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use serde_json::{json, Value};
-use texatlas::api::OptionsJson;
+use texatlas::api::{OptionsJson, ProblemCode};
 use texatlas::atlas::{Progress, Stage};
 use texatlas::jobs::{JobFailure, JobInput, JobOutput, Processor};
 use texatlas::service::{self, ServiceConfig};
@@ -59,7 +59,10 @@ impl Processor for Fake {
                     }
                     std::thread::sleep(Duration::from_millis(10));
                 }
-                return Err(JobFailure::input("not_cancelled", "nobody cancelled"));
+                return Err(JobFailure::internal(
+                    ProblemCode::InternalError,
+                    "the fake ran 60 s and nobody cancelled it",
+                ));
             }
             Some(SLOW) => std::thread::sleep(Duration::from_secs(3)),
             _ => {}
