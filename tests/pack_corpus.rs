@@ -11,7 +11,8 @@ use std::time::Instant;
 
 use texatlas::atlas::pack::test_charts::{check_packing, OwnedChart};
 use texatlas::atlas::pack::{pack_charts, PackOptions};
-use texatlas::atlas::segment::{segment_charts, validate_charts, SegmentOptions, ValidateOptions};
+use texatlas::atlas::parameterize::{validate_charts, ValidateOptions};
+use texatlas::atlas::segment::{segment_charts, SegmentOptions};
 use texatlas::gltf_io::{decode, DecodeLimits, Resources};
 use texatlas::mesh::TriangleMesh;
 

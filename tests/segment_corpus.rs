@@ -13,10 +13,10 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use texatlas::atlas::segment::{
-    chart_mesh, check_chart_is_disk, segment_charts, validate_charts, ChartDefect, SegmentOptions,
-    ValidateOptions, ValidatedCharts,
+use texatlas::atlas::parameterize::{
+    chart_mesh, validate_charts, ChartDefect, ValidateOptions, ValidatedCharts,
 };
+use texatlas::atlas::segment::{check_chart_is_disk, segment_charts, SegmentOptions};
 use texatlas::gltf_io::{decode, DecodeLimits, Resources};
 use texatlas::mesh::TriangleMesh;
 

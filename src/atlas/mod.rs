@@ -37,7 +37,8 @@ pub use progress::{NoProgress, Progress, Stage};
 
 use crate::mesh::{TriangleMesh, VertexId};
 use pack::Packing;
-use segment::{segment_charts, validate_charts_with_monitor, ChartDefect, SegmentError};
+use parameterize::{validate_charts_with_monitor, ChartDefect};
+use segment::{segment_charts, SegmentError};
 
 /// Errors of [`generate`]. Each says what is wrong and how to fix it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -359,16 +360,16 @@ const PACKING_CUT_MAX_TRIES: usize = 4;
 /// number of cuts kept.
 fn cut_for_packing(
     mesh: &TriangleMesh,
-    validated: segment::ValidatedCharts,
+    validated: parameterize::ValidatedCharts,
     options: &AtlasOptions,
-) -> Result<(segment::ValidatedCharts, usize, Option<Packing>), AtlasError> {
+) -> Result<(parameterize::ValidatedCharts, usize, Option<Packing>), AtlasError> {
     if options.pack.density != TexelDensity::FitToPage || mesh.num_faces() > PACKING_CUT_MAX_FACES {
         return Ok((validated, 0, None));
     }
     // The estimated efficiency of `v`'s packing, its number of packed charts, and the packing
     // (None above PACKING_CUT_MAX_CHARTS charts, where no cut is tried).
     let estimate =
-        |v: &segment::ValidatedCharts| -> Result<(f64, usize, Option<Packing>), AtlasError> {
+        |v: &parameterize::ValidatedCharts| -> Result<(f64, usize, Option<Packing>), AtlasError> {
             let inputs = pack_inputs(mesh, v)?;
             let packed: Vec<usize> = (0..inputs.degenerate.len())
                 .filter(|&i| !inputs.degenerate[i])
@@ -396,14 +397,14 @@ fn cut_for_packing(
     let mut current = validated;
     let mut cuts = 0;
     let mut tried: Vec<Vec<crate::mesh::FaceId>> = Vec::new();
-    let validate_options = segment::ValidateOptions {
+    let validate_options = parameterize::ValidateOptions {
         merge_passes: 0,
         ..options.validate
     };
     // `current` with the charts `picks` each cut in two, validated again.
-    let cut = |current: &segment::ValidatedCharts,
+    let cut = |current: &parameterize::ValidatedCharts,
                picks: &[usize]|
-     -> Result<segment::ValidatedCharts, AtlasError> {
+     -> Result<parameterize::ValidatedCharts, AtlasError> {
         let charts = &current.segmentation.charts;
         let mut stats = current.segmentation.stats;
         let mut proposed: Vec<Vec<crate::mesh::FaceId>> = Vec::new();
@@ -417,7 +418,11 @@ fn cut_for_packing(
             proposed.extend(segment::enforce_disks(mesh, vec![a, b], &mut stats));
         }
         let seg = segment::finish(mesh, proposed, stats);
-        Ok(segment::validate_charts(mesh, &seg, &validate_options)?)
+        Ok(parameterize::validate_charts(
+            mesh,
+            &seg,
+            &validate_options,
+        )?)
     };
     let area = |c: &[crate::mesh::FaceId]| -> f64 { c.iter().map(|&f| mesh.face_area_m2(f)).sum() };
     for _ in 0..PACKING_CUT_MAX_TRIES {
@@ -480,7 +485,7 @@ struct PackInputs {
 /// `cut_for_packing` and the pack stage see the same charts. Errors when a chart has no map.
 fn pack_inputs(
     mesh: &TriangleMesh,
-    v: &segment::ValidatedCharts,
+    v: &parameterize::ValidatedCharts,
 ) -> Result<PackInputs, AtlasError> {
     let charts = &v.segmentation.charts;
     let mut local_of = vec![u32::MAX; mesh.num_vertices()];
@@ -530,7 +535,7 @@ fn pack_inputs(
 
 /// The packer's view of the charts `packed` of `v` (see [`pack_inputs`]).
 fn pack_charts_of<'a>(
-    v: &'a segment::ValidatedCharts,
+    v: &'a parameterize::ValidatedCharts,
     packed: &[usize],
     triangles: &'a [Vec<[u32; 3]>],
     area_m2: &[f64],

@@ -7,7 +7,8 @@
 //! Invariant: no option uses 0 to mean "unlimited" (`Option` does); [`AtlasOptions::check`]
 //! rejects meaningless values before any work starts, naming the option and what to use.
 use super::pack::PackOptions;
-use super::segment::{SegmentOptions, ValidateOptions};
+use super::parameterize::ValidateOptions;
+use super::segment::SegmentOptions;
 use super::AtlasError;
 
 /// Options of the whole pipeline.

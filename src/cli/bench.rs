@@ -4,8 +4,9 @@ use std::process::ExitCode;
 
 use anyhow::Context as _;
 use texatlas::api::{OptionsJson, ResolutionJson};
+use texatlas::atlas::parameterize::chart_mesh;
 use texatlas::atlas::parameterize::ChartMesh;
-use texatlas::atlas::segment::{chart_mesh, check_chart_is_disk};
+use texatlas::atlas::segment::check_chart_is_disk;
 use texatlas::atlas::NoProgress;
 use texatlas::bench::pipeline::{self, BenchConfig, PipelineRow, Quality};
 use texatlas::mesh::TriangleMesh;
