@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use texatlas::atlas::pack::test_charts::{check_packing, OwnedChart};
 use texatlas::atlas::pack::{pack_charts, PackOptions};
-use texatlas::atlas::parameterize::{validate_charts, ValidateOptions};
+use texatlas::atlas::parameterize::{parameterize_charts, ParameterizeOptions};
 use texatlas::atlas::segment::{segment_charts, SegmentOptions};
 use texatlas::gltf_io::{decode, DecodeLimits, Resources};
 use texatlas::mesh::TriangleMesh;
@@ -43,7 +43,8 @@ fn pack_every_corpus_mesh() {
             .expect("builds")
             .mesh;
         let seg = segment_charts(&mesh, &SegmentOptions::default()).expect("segments");
-        let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("validates");
+        let v =
+            parameterize_charts(&mesh, &seg, &ParameterizeOptions::default()).expect("validates");
         let mut charts = Vec::new();
         for (faces, map) in v.segmentation.charts.iter().zip(&v.maps) {
             let Some((map, global)) = map else { continue };

@@ -4,7 +4,7 @@
 //! segment → parameterize + validate → pack → measure. Each stage is a function of the previous
 //! stage's output and its own options:
 //! - [`segment`]: `segment_charts` cuts a [`TriangleMesh`] into charts that are each a topological
-//!   disk (Lévy et al. 2002 §3.1–3.2), and `validate_charts` flattens them with [`parameterize`]
+//!   disk (Lévy et al. 2002 §3.1–3.2), and `parameterize_charts` flattens them with [`parameterize`]
 //!   and splits those with flips, UV boundary crossings or too much area distortion (§3.3);
 //!   then, on small meshes with few charts that pack poorly, `cut_for_packing` (in this file)
 //!   cuts charts in two when that raises the packing efficiency (issue 5's 0.60 target; each cut
@@ -37,7 +37,7 @@ pub use progress::{NoProgress, Progress, Stage};
 
 use crate::mesh::{TriangleMesh, VertexId};
 use pack::Packing;
-use parameterize::{validate_charts_with_monitor, ChartDefect};
+use parameterize::{parameterize_charts_with_monitor, ChartDefect};
 use segment::{segment_charts, SegmentError};
 
 /// Errors of [`generate`]. Each says what is wrong and how to fix it.
@@ -190,15 +190,16 @@ pub fn generate(
         progress.advance(Stage::Parameterize, 0, seg.num_charts()),
         Stage::Parameterize,
     )?;
-    let validated = validate_charts_with_monitor(mesh, &seg, &options.validate, &mut |(d, t)| {
-        progress.advance(Stage::Parameterize, d, t)
-    })
-    .map_err(|e| match e {
-        SegmentError::Cancelled => AtlasError::Cancelled {
-            stage: Stage::Parameterize,
-        },
-        other => other.into(),
-    })?;
+    let validated =
+        parameterize_charts_with_monitor(mesh, &seg, &options.parameterize, &mut |(d, t)| {
+            progress.advance(Stage::Parameterize, d, t)
+        })
+        .map_err(|e| match e {
+            SegmentError::Cancelled => AtlasError::Cancelled {
+                stage: Stage::Parameterize,
+            },
+            other => other.into(),
+        })?;
     let n = validated.segmentation.charts.len();
     check(
         progress.advance(Stage::Parameterize, n, n),
@@ -360,16 +361,16 @@ const PACKING_CUT_MAX_TRIES: usize = 4;
 /// number of cuts kept.
 fn cut_for_packing(
     mesh: &TriangleMesh,
-    validated: parameterize::ValidatedCharts,
+    validated: parameterize::ParameterizedCharts,
     options: &AtlasOptions,
-) -> Result<(parameterize::ValidatedCharts, usize, Option<Packing>), AtlasError> {
+) -> Result<(parameterize::ParameterizedCharts, usize, Option<Packing>), AtlasError> {
     if options.pack.density != TexelDensity::FitToPage || mesh.num_faces() > PACKING_CUT_MAX_FACES {
         return Ok((validated, 0, None));
     }
     // The estimated efficiency of `v`'s packing, its number of packed charts, and the packing
     // (None above PACKING_CUT_MAX_CHARTS charts, where no cut is tried).
     let estimate =
-        |v: &parameterize::ValidatedCharts| -> Result<(f64, usize, Option<Packing>), AtlasError> {
+        |v: &parameterize::ParameterizedCharts| -> Result<(f64, usize, Option<Packing>), AtlasError> {
             let inputs = pack_inputs(mesh, v)?;
             let packed: Vec<usize> = (0..inputs.degenerate.len())
                 .filter(|&i| !inputs.degenerate[i])
@@ -397,14 +398,14 @@ fn cut_for_packing(
     let mut current = validated;
     let mut cuts = 0;
     let mut tried: Vec<Vec<crate::mesh::FaceId>> = Vec::new();
-    let validate_options = parameterize::ValidateOptions {
+    let validate_options = parameterize::ParameterizeOptions {
         merge_passes: 0,
-        ..options.validate
+        ..options.parameterize
     };
     // `current` with the charts `picks` each cut in two, validated again.
-    let cut = |current: &parameterize::ValidatedCharts,
+    let cut = |current: &parameterize::ParameterizedCharts,
                picks: &[usize]|
-     -> Result<parameterize::ValidatedCharts, AtlasError> {
+     -> Result<parameterize::ParameterizedCharts, AtlasError> {
         let charts = &current.segmentation.charts;
         let mut stats = current.segmentation.stats;
         let mut proposed: Vec<Vec<crate::mesh::FaceId>> = Vec::new();
@@ -418,7 +419,7 @@ fn cut_for_packing(
             proposed.extend(segment::enforce_disks(mesh, vec![a, b], &mut stats));
         }
         let seg = segment::finish(mesh, proposed, stats);
-        Ok(parameterize::validate_charts(
+        Ok(parameterize::parameterize_charts(
             mesh,
             &seg,
             &validate_options,
@@ -485,7 +486,7 @@ struct PackInputs {
 /// `cut_for_packing` and the pack stage see the same charts. Errors when a chart has no map.
 fn pack_inputs(
     mesh: &TriangleMesh,
-    v: &parameterize::ValidatedCharts,
+    v: &parameterize::ParameterizedCharts,
 ) -> Result<PackInputs, AtlasError> {
     let charts = &v.segmentation.charts;
     let mut local_of = vec![u32::MAX; mesh.num_vertices()];
@@ -535,7 +536,7 @@ fn pack_inputs(
 
 /// The packer's view of the charts `packed` of `v` (see [`pack_inputs`]).
 fn pack_charts_of<'a>(
-    v: &'a parameterize::ValidatedCharts,
+    v: &'a parameterize::ParameterizedCharts,
     packed: &[usize],
     triangles: &'a [Vec<[u32; 3]>],
     area_m2: &[f64],

@@ -16,7 +16,7 @@ use std::ops::ControlFlow;
 pub enum Stage {
     /// Feature detection and chart growing (`segment_charts`).
     Segment,
-    /// Flattening every chart and splitting the invalid ones (`validate_charts`).
+    /// Flattening every chart and splitting the invalid ones (`parameterize_charts`).
     Parameterize,
     /// Placing the charts on pages (`pack_charts`).
     Pack,

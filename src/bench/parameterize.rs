@@ -1,7 +1,7 @@
 //! `texatlas bench parameterize`: LSCM direct vs single-level Jacobi-CG vs HLSCM.
 //!
 //! Purpose: the measurement behind issue 3's targets and behind
-//! [`crate::atlas::parameterize::ParameterizeOptions::auto_hierarchical_min_vertices`].
+//! [`crate::atlas::parameterize::FlattenOptions::auto_hierarchical_min_vertices`].
 //!
 //! How: the parent generates (or is given) each chart, writes it once to a raw file in the
 //! temp directory, then runs every method in a child process of the same binary (hidden
@@ -11,7 +11,7 @@
 //! its energy is within `1e-4` relative of the direct energy, or the timeout (default 300 s).
 //!
 //! Timed: chart validation, pin selection, assembly and solve (everything
-//! `parameterize_chart` does). Not timed: mesh generation and file IO.
+//! `flatten_chart` does). Not timed: mesh generation and file IO.
 //!
 //! This module is NOT core: it uses wall-clock time, processes and the filesystem.
 use std::io::{Read, Write};
@@ -26,7 +26,7 @@ use crate::atlas::parameterize::chart::ChartMesh;
 use crate::atlas::parameterize::hlscm::{build_hierarchy, HlscmOptions};
 use crate::atlas::parameterize::lscm::{diameter_pins, LscmSystem};
 use crate::atlas::parameterize::{
-    conformal_energy, flipped_faces, parameterize_chart, ParameterizeMethod, ParameterizeOptions,
+    conformal_energy, flatten_chart, flipped_faces, FlattenOptions, ParameterizeMethod,
 };
 use crate::numerics::CgOptions;
 
@@ -247,15 +247,15 @@ pub fn run_method(
     let mut phases: Vec<(String, f64)> = Vec::new();
     let (uv, iterations, converged, levels) = match method {
         BenchMethod::LscmDirect => {
-            let options = ParameterizeOptions {
+            let options = FlattenOptions {
                 method: ParameterizeMethod::Direct,
-                ..ParameterizeOptions::default()
+                ..FlattenOptions::default()
             };
-            let map = parameterize_chart(chart, &options)?;
+            let map = flatten_chart(chart, &options)?;
             (map.uv, map.iterations, true, Vec::new())
         }
         BenchMethod::Hlscm => {
-            // Same steps as `parameterize_chart` with `Hierarchical`, split to time the phases
+            // Same steps as `flatten_chart` with `Hierarchical`, split to time the phases
             // as hlscm-2003 Table 1 does ("PM construction" vs "multigrid").
             let options = hlscm_options_from_env();
             let topology = chart.validate()?;

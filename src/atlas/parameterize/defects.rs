@@ -1,5 +1,20 @@
-//! Defect tests of a chart map.
-use super::{ChartMap, ParameterizeError, ValidateOptions};
+//! The tests a chart's map must pass (Lévy et al. 2002 §3.3) and their 2-D predicates.
+//!
+//! Purpose: [`find_defect`] returns the first defect of a map, in the order flips, boundary
+//! self-intersection or vertex fold, stretch, area ratio; the stage splits the chart by it.
+//!
+//! Predicates: orientation signs are computed in `f64` with a relative tolerance (`orient`): an
+//! orientation within 1e-12 of its operands' scale counts as 0, so a crossing within rounding of
+//! a touching or of a collinear overlap counts as a crossing instead of being decided by noise.
+//! Boundary crossings are found exactly in the combinatorial sense: every pair of non-adjacent
+//! boundary segments sharing a cell of a uniform grid is tested. A map with no flip and a simple
+//! boundary can still fold where the UV angles around a vertex wrap past a full turn (≥ 4π
+//! inside, ≥ 2π on the boundary, whose two boundary segments share an endpoint and so are never
+//! tested against each other): [`vertex_fold`].
+//!
+//! Units: UVs and positions in model units; angles in radians; stretch is Sander et al. 2001's
+//! L2 stretch of the chart scaled to UV area = model area (1 is isometric).
+use super::{ChartMap, ParameterizeError, ParameterizeOptions};
 use crate::mesh::FaceId;
 
 /// What is wrong with a chart's map (why it is split, or why it is returned as is).
@@ -25,7 +40,7 @@ pub enum ChartDefect {
         max_face: FaceId,
     },
     /// The chart's Sander L2 stretch, the chart scaled to UV area = model area, is above
-    /// [`ValidateOptions::max_stretch`].
+    /// [`ParameterizeOptions::max_stretch`].
     Stretch {
         /// The chart's L2 stretch (1 is isometric).
         l2: f64,
@@ -44,7 +59,7 @@ pub(super) fn find_defect(
     cm: &crate::atlas::parameterize::ChartMesh,
     boundary_loop: &[u32],
     map: &ChartMap,
-    options: &ValidateOptions,
+    options: &ParameterizeOptions,
 ) -> Option<ChartDefect> {
     if !map.flipped_faces.is_empty() {
         return Some(ChartDefect::Flipped {

@@ -1,8 +1,21 @@
-//! Zero-area faces.
+//! Zero-area faces (collinear corners or a repeated vertex, `TriangleMesh::face_degeneracy`).
+//!
+//! LSCM cannot flatten them (their `1/√d_T` weight is infinite), yet every chart gets a map:
+//! - a chart is flattened without its zero-area faces ([`flatten_around_degenerate`]), and
+//!   every vertex only they use gets a UV from its face's two mapped corners (the point of their
+//!   UV segment at the vertex's 3-D position projected on the 3-D segment) or else the UV of a
+//!   mapped corner ([`extend_map`]); such a face maps to a (near-)degenerate UV triangle, is never
+//!   listed as flipped and takes no part in the overlap and area tests;
+//! - when the chart without them is not a disk, it is cut into disks first and each glued group
+//!   of zero-area faces joins the first neighbouring part with which it is still a disk
+//!   ([`split_off_degenerate`]);
+//! - a chart made only of zero-area faces gets the line map ([`line_map`]).
+//!
+//! Units: UVs in model units. Pure functions, called in parallel.
 use super::defects::{find_defect, ChartDefect};
 use super::{
-    chart_mesh, parameterize_chart_with_topology, ChartMap, LocatedMap, ParameterizeError,
-    ParameterizeMethod, ValidateOptions,
+    chart_mesh, flatten_chart_with_topology, ChartMap, LocatedMap, ParameterizeError,
+    ParameterizeMethod, ParameterizeOptions,
 };
 use crate::atlas::segment::{disk_check, enforce_disks, SegmentStats};
 use crate::mesh::{FaceId, TriangleMesh, VertexId};
@@ -30,10 +43,10 @@ pub(super) fn is_degenerate(mesh: &TriangleMesh, f: FaceId) -> bool {
 
 /// Flattens the chart `faces` (ascending) without its zero-area faces, then gives the vertices
 /// only those faces use UVs from the map (`extend_map`). Pure; called in parallel.
-pub(super) fn flatten_chart(
+pub(super) fn flatten_around_degenerate(
     mesh: &TriangleMesh,
     faces: &[FaceId],
-    options: &ValidateOptions,
+    options: &ParameterizeOptions,
 ) -> Attempt {
     let mut dropped: Vec<bool> = faces.iter().map(|&f| is_degenerate(mesh, f)).collect();
     // Each retry drops one more face (the parameterizer's own zero-area test may disagree with
@@ -57,7 +70,7 @@ pub(super) fn flatten_chart(
             return Attempt::NotADiskWithoutDegenerate;
         }
         let (cm, global) = chart_mesh(mesh, &kept);
-        match parameterize_chart_with_topology(&cm, &options.parameterize) {
+        match flatten_chart_with_topology(&cm, &options.flatten) {
             Ok((map, topology)) => {
                 let defect = find_defect(&kept, &cm, &topology.boundary_loop, &map, options);
                 let map = if kept.len() == faces.len() {

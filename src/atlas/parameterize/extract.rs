@@ -1,4 +1,5 @@
-//! A chart of a mesh as the chart-local mesh the parameterizer flattens.
+//! A chart of a mesh (a set of faces) as the chart-local indexed mesh the parameterizer
+//! flattens ([`chart_mesh`]), with the map from local to global vertex ids.
 use super::ChartMesh;
 use crate::mesh::{FaceId, TriangleMesh, VertexId};
 

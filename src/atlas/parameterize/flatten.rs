@@ -1,4 +1,14 @@
-//! Flattening one chart.
+//! Flattening one chart ([`flatten_chart`]): LSCM (Lévy et al. 2002 §2) by a sparse direct solve,
+//! or hierarchical LSCM (Ray & Lévy 2003) for huge charts.
+//!
+//! Guarantees: every returned map has finite UVs, one per chart vertex; flips are never hidden
+//! ([`ChartMap::flipped_faces`] lists every face whose UV image has non-positive signed area, so
+//! the stage can split the chart); deterministic whatever the rayon thread count (fixed
+//! reduction trees in `numerics`, sequential faer, a progressive mesh whose parallel evaluation
+//! batches do not change its bits).
+//!
+//! Units: positions and UVs in model units (the second pin sits at the pins' path length from
+//! the first), not normalized.
 use std::ops::ControlFlow;
 
 use super::{
@@ -10,7 +20,7 @@ use crate::numerics::CgOptions;
 /// Which solver flattens a chart.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ParameterizeMethod {
-    /// Direct below [`ParameterizeOptions::auto_hierarchical_min_vertices`], hierarchical above.
+    /// Direct below [`FlattenOptions::auto_hierarchical_min_vertices`], hierarchical above.
     #[default]
     Auto,
     /// Sparse Cholesky on the normal equations in complex Hermitian form (exact up to rounding;
@@ -22,21 +32,15 @@ pub enum ParameterizeMethod {
     ConjugateGradient,
 }
 
-/// Options of [`parameterize_chart`].
+/// Options of [`flatten_chart`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ParameterizeOptions {
+pub struct FlattenOptions {
     /// Solver choice. Default [`ParameterizeMethod::Auto`].
     pub method: ParameterizeMethod,
     /// With `Auto`, charts with at least this many vertices use HLSCM. Default 1_048_576
-    /// (2^20, just above the largest size measured). Measured with `texatlas bench parameterize`
-    /// on this 2-core machine, the direct solve (complex Hermitian Cholesky) was faster at every
-    /// size we ran: 126k vertices 1.6 s vs 2.6 s; 500k vertices (1M triangles) 7.5 s vs 19.4 s
-    /// and 1.0M vertices (2M triangles) 19.3 s vs 46.5 s in one run under load (2026-12-01),
-    /// and 2.3–4.3 s vs 10–12.6 s at 500k in other runs. Since the Hermitian form halved the
-    /// factor, the peak memory is close too: 665 vs 652 MiB at 500k vertices, 1407 vs 1255 MiB
-    /// at 1.0M. (Before it, the direct solve took 1432 MiB at 500k and this threshold was 500k.)
-    /// So the direct solve is used up to the largest size measured, and HLSCM, whose memory grows
-    /// linearly while the Cholesky fill grows superlinearly, beyond it.
+    /// (2^20). Trade-off: the direct solve (complex Hermitian Cholesky) was faster at every
+    /// size measured (up to 1M vertices) at a similar peak memory; HLSCM, whose memory grows
+    /// linearly while the Cholesky fill grows superlinearly, is kept for larger charts.
     pub auto_hierarchical_min_vertices: usize,
     /// HLSCM tuning.
     pub hlscm: HlscmOptions,
@@ -45,7 +49,7 @@ pub struct ParameterizeOptions {
     pub cg: CgOptions,
 }
 
-impl Default for ParameterizeOptions {
+impl Default for FlattenOptions {
     fn default() -> Self {
         Self {
             method: ParameterizeMethod::Auto,
@@ -88,31 +92,31 @@ impl ChartMap {
 /// Flattens one chart. See the module doc for the guarantees.
 ///
 /// Errors: any defect of the chart (see [`ChartMesh::validate`]) or a solver failure.
-pub fn parameterize_chart(
+pub fn flatten_chart(
     chart: &ChartMesh,
-    options: &ParameterizeOptions,
+    options: &FlattenOptions,
 ) -> Result<ChartMap, ParameterizeError> {
-    parameterize_chart_with_monitor(chart, options, &mut |_| ControlFlow::Continue(()))
+    flatten_chart_with_monitor(chart, options, &mut |_| ControlFlow::Continue(()))
 }
 
-/// [`parameterize_chart`] with a monitor called with `(done, total)` CG iterations on the
+/// [`flatten_chart`] with a monitor called with `(done, total)` CG iterations on the
 /// iterative paths; returning `Break` cancels with [`ParameterizeError::Cancelled`]. This is
 /// where the pipeline's `Progress` trait plugs in.
-pub fn parameterize_chart_with_monitor(
+pub fn flatten_chart_with_monitor(
     chart: &ChartMesh,
-    options: &ParameterizeOptions,
+    options: &FlattenOptions,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
 ) -> Result<ChartMap, ParameterizeError> {
     let topology = chart.validate()?;
     flatten_validated(chart, &topology, options, monitor)
 }
 
-/// [`parameterize_chart`], also returning the chart's connectivity (computed once, by
+/// [`flatten_chart`], also returning the chart's connectivity (computed once, by
 /// [`ChartMesh::validate`]), for callers that inspect the map further (chart validation reads
 /// the boundary loop).
-pub fn parameterize_chart_with_topology(
+pub fn flatten_chart_with_topology(
     chart: &ChartMesh,
-    options: &ParameterizeOptions,
+    options: &FlattenOptions,
 ) -> Result<(ChartMap, ChartTopology), ParameterizeError> {
     let topology = chart.validate()?;
     let map = flatten_validated(
@@ -128,7 +132,7 @@ pub fn parameterize_chart_with_topology(
 fn flatten_validated(
     chart: &ChartMesh,
     topology: &ChartTopology,
-    options: &ParameterizeOptions,
+    options: &FlattenOptions,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
 ) -> Result<ChartMap, ParameterizeError> {
     let pins = lscm::diameter_pins(chart, topology);

@@ -1,36 +1,39 @@
-//! Merge-back.
+//! The merge-back: valid charts are merged into a neighbour while the union is still a disk and
+//! passes every test of [`super::defects`] ([`merge_back`]; Lévy et al. 2002 §3.3 leaves small
+//! split charts; merging them back undoes over-segmentation).
+//!
+//! Whether a union is a disk is decided from the two charts' intersection alone ([`union_arc`],
+//! linear in the smaller chart). A union whose two maps draw their shared boundary very
+//! differently ([`shared_arc_misfit`] above `MERGE_MAX_ARC_MISFIT`) is not flattened: such
+//! unions fail the tests anyway. Deterministic: the pass is sequential; the speculative
+//! flattening of [`super::schedule`] never changes its result.
 use std::ops::ControlFlow;
 
 use super::defects::find_defect;
-use super::degenerate::{flatten_chart, is_degenerate, Attempt};
+use super::degenerate::{flatten_around_degenerate, is_degenerate, Attempt};
 use super::schedule::{MergeKey, Speculation, SPECULATION_CHARTS_PER_THREAD};
 use super::{
-    chart_mesh, conformal_energy, flipped_faces, lscm, ChartMap, LocatedMap, Pin, ValidateOptions,
-    LATE_MERGE_MAX_FACES, MERGE_CAP_FLOOR_FACES,
+    chart_mesh, conformal_energy, flipped_faces, lscm, ChartMap, LocatedMap, ParameterizeOptions,
+    Pin, LATE_MERGE_MAX_FACES, MERGE_CAP_FLOOR_FACES,
 };
 use crate::atlas::segment::{disk_check, SegmentError};
 use crate::mesh::{FaceId, TriangleMesh, VertexId};
 
-/// Merges valid charts into a neighbour while the merged chart is still a disk and still valid
-/// (issue 4: "small charts made by splitting are merged back"), in at most
-/// [`ValidateOptions::merge_passes`] passes. The first pass visits only the small charts (fewer
-/// faces than half the mean chart size when validation ends), later passes every chart: the
-/// cost of a try is that of flattening the union, so trying every chart is much dearer
-/// (measured on bunny, one thread, under load: the first pass 23 tries of 2,100 faces on
-/// average, 0.06 s of flattening; the second 34 tries of 10,000 faces, 0.6 s, of which 20
-/// fail — 17 over the stretch bound, 3 not a disk). Each pass visits
-/// the valid charts smallest first
-/// (ties by lowest face) and tries the [`MERGE_TRIES`] neighbours sharing the most edges with it
-/// (ties by index), keeping the first valid union; a merged chart can take more merges later in
-/// the pass. A pair that failed is not tried again until one of its charts has grown. Returns
-/// the number of merges. Unions above [`ValidateOptions::merge_max_chart_fraction`] of the
-/// mesh (and above [`MERGE_CAP_FLOOR_FACES`]) are not tried. Cost: one parameterization of the
-/// union per try.
+/// Merges valid charts into a neighbour while the merged chart is still a disk and still valid,
+/// in at most [`ParameterizeOptions::merge_passes`] passes. The first pass visits only the small
+/// charts (fewer faces than half the mean chart size when validation ends), later passes every
+/// chart (the cost of a try is that of flattening the union, so trying every chart is much
+/// dearer). Each pass visits the valid charts smallest first (ties by lowest face) and tries the
+/// [`MERGE_TRIES`] neighbours sharing the most edges with it (ties by index), keeping the first
+/// valid union; a merged chart can take more merges later in the pass. A pair that failed is
+/// not tried again until one of its charts has grown. Returns the number of merges. Unions above
+/// [`ParameterizeOptions::merge_max_chart_fraction`] of the mesh (and above
+/// [`MERGE_CAP_FLOOR_FACES`]) are not tried. Cost: one parameterization of the union per try.
 pub(super) fn merge_back(
     mesh: &TriangleMesh,
     done: &mut Vec<(Vec<FaceId>, LocatedMap)>,
     unresolved: &std::collections::BTreeSet<FaceId>,
-    options: &ValidateOptions,
+    options: &ParameterizeOptions,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
 ) -> Result<usize, SegmentError> {
     let valid: Vec<bool> = done
@@ -83,7 +86,7 @@ pub(super) fn merge_back(
     };
     // What the union of charts `i` and `j` needs: decided without flattening (`Some`: too
     // large or not a disk, `None` map; or the extension of the larger chart's map), or
-    // `None`: flatten it (`flatten_chart`).
+    // `None`: flatten it (`flatten_around_degenerate`).
     let pre_check = |union: &[FaceId],
                      i: usize,
                      j: usize,
@@ -159,7 +162,7 @@ pub(super) fn merge_back(
         // sequential one whatever the thread count.
         let spec = Speculation::default();
         let window = SPECULATION_CHARTS_PER_THREAD * rayon::current_num_threads();
-        let flatten_ok = |union: &[FaceId]| match flatten_chart(mesh, union, options) {
+        let flatten_ok = |union: &[FaceId]| match flatten_around_degenerate(mesh, union, options) {
             Attempt::Mapped { map, defect: None } => Some(map),
             _ => None,
         };
@@ -318,7 +321,7 @@ pub(super) fn extend_into(
     union: &[FaceId],
     big: &(Vec<FaceId>, LocatedMap),
     small: &[FaceId],
-    options: &ValidateOptions,
+    options: &ParameterizeOptions,
 ) -> Option<LocatedMap> {
     if union.iter().any(|&f| is_degenerate(mesh, f)) {
         return None;
@@ -456,21 +459,15 @@ pub(super) fn similarity_misfit(pa: &[[f64; 2]], pb: &[[f64; 2]]) -> f64 {
 }
 
 /// `merge_back` does not flatten a union whose two maps draw their shared boundary this
-/// differently ([`shared_arc_misfit`] above it): such a union fails anyway. Measured (one run,
-/// release) on bunny, armadillo, fandisk and spot before this test: of the 314 unions
-/// flattened, every one with a misfit above 0.7 failed (45: 37 on armadillo, 6 on spot, 2 on
-/// bunny; stretch up to 4,400, or a fold), while failures start at a misfit of 0.03 and the
-/// highest of a success was 0.50; skipping them saves 7 % (bunny), 13 % (armadillo) and 9 % (spot) of the faces flattened
-/// by the merge tries. It is a prediction, not a proof: a union above it that would pass is
-/// not merged (one more chart, never an invalid map). On the corpus that happened only on
-/// 2CylinderEngine (2613 → 2615 charts, evaluator packing 0.601832 either way, L2 1.02699 →
-/// 1.02693); every other corpus GLB, `beast_sub2_1M` included, is byte-identical.
+/// differently ([`shared_arc_misfit`] above it): such a union fails the tests anyway (on the
+/// corpus every union above 0.7 failed, and the highest misfit of a success was 0.5). It is a
+/// prediction, not a proof: a union above it that would pass is not merged (one more chart,
+/// never an invalid map), for less flattening work.
 pub(super) const MERGE_MAX_ARC_MISFIT: f64 = 0.7;
 
 /// `merge_back` first tries `extend_into` when the smaller chart has at most 1 / this of the
-/// larger one's faces. Off (2^40): measured with 32 (one run, release), it saved ~10 % of the
-/// validation CPU on bunny and ~15 % on armadillo, but raised the global L2 stretch from 1.0298
-/// to 1.0305 (bunny) and 1.0353 to 1.0361 (armadillo), so the exact union solve is kept.
+/// larger one's faces. Off (2^40): the extension saves flattening work but leaves a slightly
+/// higher global stretch than the exact union solve, which is kept.
 pub(super) const EXTEND_RATIO: usize = 1 << 40;
 
 /// Neighbours tried per chart and pass by `merge_back`.

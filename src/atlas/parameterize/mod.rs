@@ -1,24 +1,39 @@
-//! Chart parameterization: LSCM (Lévy et al. 2002 §2) and hierarchical LSCM (Ray & Lévy 2003).
+//! The parameterize stage: flatten every chart, split the charts whose map is not usable, merge
+//! valid charts back (Lévy et al. 2002 §3.3), so that every chart leaves with a valid map.
 //!
-//! Purpose: flatten one chart (a topological disk, [`ChartMesh`]) into the plane with the least
-//! squares conformal map, choosing between a sparse direct solve (small and medium charts) and
-//! the cascadic multigrid over a progressive mesh (HLSCM, huge charts).
+//! Entry: [`parameterize_charts`] takes the segmentation (every chart a topological disk) and
+//! returns [`ParameterizedCharts`]: the final charts (still satisfying the segmentation contract:
+//! every chart a disk, every face in exactly one chart) and one map per chart.
 //!
-//! Guarantees to the next stage (issue 3 §5):
-//! - every returned map has finite UVs, one per chart vertex;
-//! - flips are never hidden: [`ChartMap::flipped_faces`] lists every face whose UV image has
-//!   non-positive signed area (empty means valid), so that chart validation can split the chart
-//!   (lscm-2002 §3.3);
-//! - deterministic: same input, same output bits, whatever the rayon thread count (fixed
-//!   reduction trees in `numerics`, sequential faer, a progressive mesh whose parallel
-//!   evaluation batches do not change its bits).
+//! Guarantees to the next stage:
+//! - every chart has a map with finite UVs, one per chart vertex, in [`chart_mesh`] order;
+//! - a valid chart's map has no flipped face, no boundary self-intersection, no vertex fold, and
+//!   its stretch (or area ratio) is within [`ParameterizeOptions`]' bounds; a chart that cannot
+//!   be made valid (a single face) is listed in `unresolved` with its [`ChartDefect`];
+//! - zero-area faces take no part in flattening and map to (near-)degenerate UV triangles;
+//! - deterministic: same input, same output bits, whatever the rayon thread count.
 //!
-//! Units: positions in model units (`_m`); UVs in model units (the second pin sits at the
-//! pins' path length from the first), NOT yet normalized to \[0,1\]: packing does that.
+//! Units: positions in model units (`_m`); UVs in model units (the second pin sits at the pins'
+//! path length from the first), NOT yet normalized to \[0,1\]: packing does that.
 //!
-//! Code map: [`chart`] (input and validation), [`lscm`] (the LSCM system, §2),
-//! [`progressive_mesh`] (half-edge collapses, hlscm-2003 §4), [`hlscm`] (cascadic multigrid,
-//! hlscm-2003 §3.3 and §4.1).
+//! Code map, in the order the stage runs:
+//! - [`stage`]: the loop (rounds of flatten-and-split in parallel, then the merge-back);
+//! - [`flatten`]: one chart's map — [`lscm`] (the LSCM system, Lévy et al. 2002 §2) or
+//!   [`hlscm`] (cascadic multigrid over a [`progressive_mesh`], Ray & Lévy 2003 §3.3, §4), on a
+//!   [`chart`] extracted by [`extract`];
+//! - `degenerate`: flattening around zero-area faces, the line map, splitting them off;
+//! - [`defects`]: the tests a map must pass (flips, boundary crossings, folds, stretch, area
+//!   ratio; §3.3), with their 2-D predicates;
+//! - `split`: the two seeds a chart with a defect is re-grown from; [`sock`]: the lengthwise
+//!   seeds of a sock-shaped chart (§3.2, Figure 5);
+//! - `warm_start`: a split part keeps its parent's map when that map is valid for it;
+//! - `merge`: the merge-back of valid charts into a neighbour; `schedule`: the largest-first
+//!   parallel map and the speculative flattening of merge tries.
+//!
+//! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
+//! Automatic Texture Atlas Generation", SIGGRAPH 2002, §2–§3.3; N. Ray, B. Lévy, "Hierarchical
+//! Least Squares Conformal Map", Pacific Graphics 2003; P. Sander, J. Snyder, S. Gortler, H.
+//! Hoppe, "Texture Mapping Progressive Meshes", SIGGRAPH 2001 (the L2 stretch).
 pub mod chart;
 pub mod defects;
 mod degenerate;
@@ -43,13 +58,15 @@ pub use chart::{ChartMesh, ChartTopology};
 pub use defects::{boundary_crossing, vertex_fold, ChartDefect};
 pub use extract::chart_mesh;
 pub use flatten::{
-    parameterize_chart, parameterize_chart_with_monitor, parameterize_chart_with_topology,
-    ChartMap, ParameterizeMethod, ParameterizeOptions,
+    flatten_chart, flatten_chart_with_monitor, flatten_chart_with_topology, ChartMap,
+    FlattenOptions, ParameterizeMethod,
 };
 pub use hlscm::{HlscmLevel, HlscmOptions, HlscmReport, HlscmSmoother};
 pub use lscm::{conformal_energy, flipped_faces, LscmSystem, Pin};
-pub use options::{ValidateOptions, LATE_MERGE_MAX_FACES, MERGE_CAP_FLOOR_FACES};
-pub use stage::{validate_charts, validate_charts_with_monitor, LocatedMap, ValidatedCharts};
+pub use options::{ParameterizeOptions, LATE_MERGE_MAX_FACES, MERGE_CAP_FLOOR_FACES};
+pub use stage::{
+    parameterize_charts, parameterize_charts_with_monitor, LocatedMap, ParameterizedCharts,
+};
 
 use crate::numerics::{CholeskyError, SparseError};
 

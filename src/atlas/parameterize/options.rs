@@ -1,10 +1,16 @@
-//! Options of the parameterize stage.
-use super::ParameterizeOptions;
+//! Options of the parameterize stage ([`super::parameterize_charts`]): the validity bounds of
+//! Lévy et al. 2002 §3.3 (stretch or area ratio), the merge-back's passes and size bound, and how
+//! each chart is flattened ([`super::FlattenOptions`]).
+//!
+//! Invariant: [`ParameterizeOptions::check`] rejects meaningless values before any work; no
+//! option uses 0 to mean "unlimited" (`Option` does). Units: ratios are plain ratios, fractions
+//! are of the mesh's face count, counts are counts.
+use super::FlattenOptions;
 use crate::atlas::segment::SegmentError;
 
-/// Options of [`validate_charts`].
+/// Options of [`parameterize_charts`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ValidateOptions {
+pub struct ParameterizeOptions {
     /// The paper's area test (§3.3): largest allowed ratio between the largest and the smallest
     /// per-face area ratio (model area / UV area) within a chart, or `None` for no area test.
     /// Plain ratio `>= 1`. Default `None`: the per-chart stretch bound
@@ -20,55 +26,38 @@ pub struct ValidateOptions {
     /// that its UV area equals its model area, as the packer does), or `None` for no bound.
     /// Ratio `>= 1` (1 is isometric). A chart above it is split from its faces of smallest and
     /// largest model area per UV area, like the paper's area test. Since the atlas' global L2
-    /// stretch is the area-weighted quadratic mean of the charts' (issue 5 measures it so), it
-    /// is then at most this bound too. Default `Some(1.1)` (issue 5's target for the bunny).
+    /// stretch is the area-weighted quadratic mean of the charts' (as the report measures it), it
+    /// is then at most this bound too. Default `Some(1.1)`.
     pub max_stretch: Option<f64>,
     /// Passes of the merge-back of valid charts into a neighbour (see `merge_back`): the first
     /// pass tries only the small charts, later ones every chart; merging stops early after a
-    /// later pass without a merge. A count; 0 disables merging. Default 3: on the corpus (one
-    /// run, release, before [`Self::merge_max_chart_fraction`]) the third pass was the last
-    /// that merged anything (4 merges on armadillo, 1 on spot) and more passes changed only
-    /// 2CylinderEngine, by one chart. With the default chart size bound, 1, 2 and 3 passes
-    /// leave armadillo at 74, 45 and 39 charts (issue 4: at most 40) and bunny at 28, 21 and
-    /// 21, for a global L2 stretch of 1.037 → 1.062 (armadillo) and 1.022 → 1.037 (bunny),
-    /// within issue 5's 1.10 (one run each, release). The later passes flatten unions of large
-    /// charts and cost most of the validation time (without the bound, bunny: about 0.2 s of
-    /// CPU for the first pass, 0.8 s for the other two, one thread, machine under load). On
-    /// meshes of more than [`LATE_MERGE_MAX_FACES`]
-    /// faces only the first pass runs: the later passes' cost grows with the mesh
-    /// (beast_sub2_1M, 1.03M faces: 324 → 194 charts for 11.2 → 18.4 s of pipeline, over issue
-    /// 5's 15 s).
+    /// later pass without a merge. A count; 0 disables merging. Default 3. Trade-off: each later
+    /// pass removes charts (and raises the global stretch a little, within the bound) for the
+    /// cost of flattening unions of large charts; on meshes of more than
+    /// [`LATE_MERGE_MAX_FACES`] faces only the first pass runs, since that cost grows with the
+    /// mesh.
     pub merge_passes: usize,
     /// Largest chart the merge-back may make, as a fraction of the mesh's faces, or `None` for
     /// no bound: a union with more faces than this fraction (and more than
     /// [`MERGE_CAP_FLOOR_FACES`]) is not tried. Fraction in `(0, 1]`. It does not split
     /// charts: segmentation and validation may leave larger ones. Default `Some(0.10)`.
-    ///
-    /// Why: the union solves of large charts are most of the validation time and most of them
-    /// fail the stretch bound. Measured on bunny (one run, release, one thread, machine under
-    /// load): without the bound, 3 passes factor 5.0M complex entries of `L` in all (1.1M for
-    /// segmentation's charts, their splits and the first merge pass) and 11 of the 16 tries of
-    /// unions above 10,000 faces fail; with 0.10, 1.8M entries, validation 0.9 → 0.35 s, 21
-    /// charts instead of 14 at a global L2 stretch of 1.037 instead of 1.053 (issue 4 asks at
-    /// most 30 charts in 0.3 s). Armadillo stays at 39 charts (1.062 instead of 1.068); fandisk
-    /// 5 → 6 charts; spot, the tube, the torus, the sphere and the cube are unchanged (their
-    /// unions stay under the floor).
+    /// Trade-off: the union solves of large charts are most of the stage's time and most of
+    /// them fail the stretch bound; the bound leaves a few more charts for much less work.
     pub merge_max_chart_fraction: Option<f64>,
-    /// How each chart is flattened. Default [`ParameterizeOptions::default`].
-    pub parameterize: ParameterizeOptions,
+    /// How each chart is flattened. Default [`FlattenOptions::default`].
+    pub flatten: FlattenOptions,
 }
 
 /// Meshes with more faces than this get only the first merge pass
-/// ([`ValidateOptions::merge_passes`]).
+/// ([`ParameterizeOptions::merge_passes`]).
 pub const LATE_MERGE_MAX_FACES: usize = 500_000;
 
 /// Unions of at most this many faces are always tried by the merge-back, whatever
-/// [`ValidateOptions::merge_max_chart_fraction`] says: their solve is cheap (a few ms), and on
-/// small meshes the fraction would forbid the merges that undo over-segmentation (the 2,304-face
-/// tube: 12 segmented charts, 2 after merging; with the fraction alone, 12).
+/// [`ParameterizeOptions::merge_max_chart_fraction`] says: their solve is cheap, and on small
+/// meshes the fraction alone would forbid the merges that undo over-segmentation.
 pub const MERGE_CAP_FLOOR_FACES: usize = 4096;
 
-impl Default for ValidateOptions {
+impl Default for ParameterizeOptions {
     fn default() -> Self {
         Self {
             max_area_ratio: None,
@@ -76,12 +65,12 @@ impl Default for ValidateOptions {
             max_stretch: Some(1.1),
             merge_passes: 3,
             merge_max_chart_fraction: Some(0.10),
-            parameterize: ParameterizeOptions::default(),
+            flatten: FlattenOptions::default(),
         }
     }
 }
 
-impl ValidateOptions {
+impl ParameterizeOptions {
     /// The paper's validation (§3.3): the max / min area-ratio test with threshold 2 and no
     /// stretch bound.
     pub fn paper() -> Self {

@@ -1,4 +1,8 @@
-//! Scheduling of the stage's parallel work.
+//! Scheduling of the stage's parallel work, without changing its result:
+//! [`in_parallel_largest_first`] maps a round's charts in parallel, largest first, results in
+//! input order; [`Speculation`] flattens the merge-back's next tries on the rayon pool while its
+//! sequential pass runs, and a result is used only under the exact chart versions it was queued
+//! for.
 use rayon::prelude::*;
 
 use super::LocatedMap;

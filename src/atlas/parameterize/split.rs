@@ -1,4 +1,9 @@
-//! Split strategies.
+//! Where a chart with a defect is split: the two seed faces it is re-grown from, breadth-first
+//! at once ([`split_for`]), by defect — the ends of a diameter for a flip or a parameterizer
+//! failure, the faces of the two crossing segments for an overlap or a fold, the faces of
+//! smallest and largest model area per UV area for the area tests, and the lengthwise seeds of
+//! [`super::sock`] for an over-stretched sock-shaped chart. Both parts are connected and
+//! non-empty.
 use super::ChartDefect;
 use crate::atlas::segment::grow_two;
 use crate::mesh::{FaceId, TriangleMesh};

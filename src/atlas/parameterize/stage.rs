@@ -1,101 +1,37 @@
-//! Chart validation: LSCM paper §3.3 ("validate charts").
+//! The loop of the parameterize stage ([`parameterize_charts`]): Lévy et al. 2002 §3.3,
+//! "validate charts".
 //!
-//! Purpose: after segmentation, flatten every chart with the parameterizer (issue 3,
-//! [`parameterize_chart`](crate::atlas::parameterize::parameterize_chart)) and split the charts
-//! whose map is not usable, until every chart is:
-//! - **flipped triangle** ([`ChartMap::flipped_faces`] not empty): split in two from the ends of
-//!   a diameter of the chart's face graph (LSCM cannot flip in exact arithmetic, §2.6 and A.5, but
-//!   HLSCM and rounding can);
-//! - **boundary self-intersection in UV** (the overlaps of §3.3 / Figure 6): detected exactly
-//!   in the combinatorial sense — every pair of non-adjacent boundary segments that share a cell
-//!   of a uniform grid is tested with orientation predicates (collinear overlaps and touching
-//!   count as intersections); the chart is re-grown in two from the faces of the two crossing
-//!   segments (the paper cuts along the border of the overlapped zone; re-growing is the simpler
-//!   alternative issue 4 allows). The orientation signs are computed in `f64`, not with adaptive
-//!   exact arithmetic: an orientation within 1e-12 of its operands' scale counts as 0, so a
-//!   crossing within rounding of a touching or of a collinear overlap is reported as a crossing
-//!   (before, such a sign was decided by rounding noise and a near-collinear fold of a sliver
-//!   could pass);
-//! - **area distortion**, by one or both of two tests, each split by growing two charts from
-//!   the faces of smallest and largest model area per UV area, as in the paper:
-//!   - the chart's **Sander L2 stretch** above [`ValidateOptions::max_stretch`] (default 1.1);
-//!   - the paper's test: per-face ratio model area / UV area, max over min within the chart,
-//!     above [`ValidateOptions::max_area_ratio`] (optionally between area-weighted quantiles,
-//!     [`ValidateOptions::area_ratio_trim`]).
+//! Purpose: flatten every chart of the segmentation and split each chart whose map is not
+//! usable, until every chart is valid; then merge valid charts back into a neighbour while the
+//! union stays valid. A map is not usable when it has (tests in [`super::defects`]):
+//! - a **flipped triangle** (LSCM cannot flip in exact arithmetic, §2.6 and A.5, but HLSCM and
+//!   rounding can): split from the ends of a diameter of the chart's face graph;
+//! - a **boundary self-intersection** in UV (the overlaps of §3.3, Figure 6) or a **fold at a
+//!   vertex** (UV angles around it past a full turn): re-grown in two from the faces of the two
+//!   crossing segments, or of the vertex's fan (the paper cuts along the border of the
+//!   overlapped zone; re-growing is the simpler alternative);
+//! - too much **area distortion**: the chart's Sander L2 stretch above
+//!   [`ParameterizeOptions::max_stretch`] (the default), or the paper's test, max / min of the
+//!   per-face model area per UV area above [`ParameterizeOptions::max_area_ratio`]
+//!   ([`ParameterizeOptions::paper`]); split from the faces of smallest and largest ratio, as in
+//!   the paper, or lengthwise when the chart is sock-shaped ([`super::sock`]).
 //!
-//!   **Deviation from the paper, measured:** the default uses the stretch bound, not the
-//!   max / min area test. Max / min is decided by single outlier faces: on the scanned bunny the
-//!   paper's test at 2 split 96 times and left 75 charts (from 35) at a global L2 stretch of
-//!   1.004, far below issue 5's 1.10 target, and cost 4× the time; trimming 5 % of the area at
-//!   each end still left 45 charts. The stretch bound measures what the report measures
-//!   (area-weighted, so a sliver cannot decide it) and bounds the global L2 stretch by
-//!   construction: bunny 29 charts at L2 1.027, armadillo 85 at 1.034 (one run, release).
-//!   [`ValidateOptions::paper`] restores the paper's test.
-//!
-//!   A chart over the stretch bound whose most squeezed face lies deep inside it (a sock-shaped
-//!   extremal cylinder, lscm-2002 §3.2) is not split tip-from-rim but lengthwise, from two
-//!   opposite rim faces ([`super::sock::stretch_split_seeds`]); with that, bunny 28 charts at
-//!   L2 1.022 and armadillo 74 at 1.037 (one run, release).
-//!
-//! - **fold at a vertex** ([`vertex_fold`]): a map with no flip and a simple boundary can still
-//!   fold where the UV angles around a vertex wrap past a full turn (≥ 4π at an interior vertex,
-//!   ≥ 2π at a boundary vertex, whose two boundary segments share an endpoint and so are not
-//!   tested against each other); split like an overlap, from two faces of the vertex's fan.
-//!   Together with the tolerant orientation test above (near-collinear boundary segments of a
-//!   folded sliver count as crossing), this closes the miss seen on 2CylinderEngine with the
-//!   paper's options (two same-chart overlaps of a stretched sliver chart); the corpus test
-//!   checks every validated chart for same-chart UV overlaps independently.
+//!   Deviation from the paper: the default bounds the stretch instead of max / min, which single
+//!   outlier faces decide (it over-splits scanned meshes); the stretch bound is area-weighted,
+//!   measures what the report measures, and bounds the atlas' global L2 stretch by construction.
 //!
 //! Every part is passed through the disk guarantee again, so the result still satisfies the
-//! segmentation contract (every chart a disk, every face in one chart).
+//! segmentation contract. A part first tries its parent's map restricted to it
+//! ([`super::warm_start`]); zero-area faces are handled by [`super::degenerate`]. A chart the
+//! parameterizer rejects for another reason is split by diameter; a single face that still
+//! fails keeps the line map and is listed in `unresolved` as
+//! [`ChartDefect::Unparameterizable`]. So no chart is ever left without a map.
 //!
-//! **Warm start** (`restrict_map`): a part of a split chart is first given the restriction of
-//! its parent's map to its faces; when that restriction passes every test above (no flip, no
-//! boundary crossing, no fold, stretch and area bounds), it is kept and the part is not
-//! flattened. It is not the part's LSCM map (that is usually a little less stretched), but it is
-//! a valid map by the same tests as a fresh one. Parts with zero-area faces are always
-//! flattened. Measured (one run, release): it rarely applies to stretch splits (a part of an
-//! over-stretched map is usually still over-stretched), more often to overlap splits.
-//!
-//! Invariants: terminates — each split makes one more chart, a single triangle never splits, and
-//! the number of splits is bounded by the face count. Deterministic: charts are processed in a
-//! fixed order and the parameterizer is deterministic.
-//!
-//! Valid charts are then merged into a neighbour when the merged chart is still a disk and
-//! passes all tests ([`ValidateOptions::merge_passes`] passes, default 3, smallest first, two
-//! neighbours tried each, no union above a tenth of the mesh's faces unless it is small,
-//! [`ValidateOptions::merge_max_chart_fraction`]; see `merge_back`). Whether a union is a disk
-//! is decided from the two charts' intersection alone (`union_arc`, linear in the smaller chart), not by a disk
-//! check of the union. A union whose two maps draw their shared boundary very differently
-//! (`shared_arc_misfit` above `MERGE_MAX_ARC_MISFIT`) is not flattened: on the corpus such
-//! unions all but never passed.
-//!
-//! **Zero-area faces** (3-D degenerate: collinear corners or a repeated vertex,
-//! [`TriangleMesh::face_degeneracy`]) cannot be flattened by LSCM (their `1/√d_T` weight is
-//! infinite), yet every chart gets a map (the `maps` contract of [`ValidatedCharts`]):
-//! - the chart is flattened **without its zero-area faces**, and every vertex only they use gets
-//!   a UV from its face's two mapped corners — the point of their UV segment at the vertex's 3-D
-//!   position projected on the 3-D segment — or, when no face has two mapped corners, the UV of a
-//!   mapped corner. A zero-area face therefore maps to a (near-)degenerate UV triangle, as it is in
-//!   3-D; it is never listed in `flipped_faces` (it has no orientation) and takes no part in the
-//!   overlap and area tests. The chart itself, zero-area faces included, stays a disk;
-//! - when the chart without its zero-area faces is not a disk (a zero-area face inside the chart,
-//!   or one joining two parts), the non-degenerate faces are cut into disks first, and each glued
-//!   group of zero-area faces joins the first neighbouring part with which it is still a disk, or
-//!   else becomes a chart of its own;
-//! - a chart made only of zero-area faces gets the **line map**: every vertex projected on the
-//!   line through its first and its farthest vertex (`v = 0`).
-//!
-//! A chart the parameterizer rejects for another reason (e.g. a failed factorization) is split
-//! by diameter; a single face that still fails keeps the line map and is listed in
-//! `unresolved` as [`ChartDefect::Unparameterizable`]. So no chart is ever left without a map.
-//!
-//! Charts of one round are flattened in parallel (rayon) and the results consumed in chart
-//! order; the splits of a chart depend only on that chart, so the result does not depend on the
-//! thread count or on the processing order. The merge-back is sequential, but while it runs, the
-//! rayon pool flattens the tries of the next charts in its order (`Speculation`, queued from
-//! the current state); a result is used only when both charts are still at the versions it was
-//! queued for, so the result is that of the sequential pass.
+//! Invariants: terminates — each split makes one more chart, a single triangle never splits,
+//! and the number of splits is bounded by the face count. Deterministic: the charts of one round
+//! are flattened in parallel (pure functions of the chart and its parent's map) and consumed in
+//! chart order; the merge-back is sequential, and its speculative parallel flattening
+//! ([`super::schedule`]) uses a result only under the exact chart versions it was queued for.
 //!
 //! Units: area ratios are plain ratios (model area per UV area, divided by its minimum over the
 //! chart); UVs in model units, as the parameterizer returns them.
@@ -106,12 +42,12 @@ use std::ops::ControlFlow;
 use std::sync::Arc;
 
 use super::defects::ChartDefect;
-use super::degenerate::{flatten_chart, line_map, split_off_degenerate, Attempt};
+use super::degenerate::{flatten_around_degenerate, line_map, split_off_degenerate, Attempt};
 use super::merge::merge_back;
 use super::schedule::in_parallel_largest_first;
 use super::split::split_for;
 use super::warm_start::restrict_map;
-use super::{ChartMap, ValidateOptions};
+use super::{ChartMap, ParameterizeOptions};
 use crate::atlas::segment::{
     disk_check, enforce_disks, finish, SegmentError, SegmentStats, Segmentation,
 };
@@ -122,7 +58,7 @@ pub type LocatedMap = (ChartMap, Vec<crate::mesh::VertexId>);
 
 /// The validated charts and their maps.
 #[derive(Debug, Clone, PartialEq)]
-pub struct ValidatedCharts {
+pub struct ParameterizedCharts {
     /// The final charts (each a disk; see [`Segmentation`]).
     pub segmentation: Segmentation,
     /// The map of each chart (same order as `segmentation.charts`). **Contract:** every entry is
@@ -149,33 +85,33 @@ pub struct ValidatedCharts {
 
 /// Parameterizes every chart of `seg` and splits invalid ones until all are valid (module doc).
 ///
-/// Equivalent to [`validate_charts_with_monitor`] with a monitor that never cancels.
-pub fn validate_charts(
+/// Equivalent to [`parameterize_charts_with_monitor`] with a monitor that never cancels.
+pub fn parameterize_charts(
     mesh: &TriangleMesh,
     seg: &Segmentation,
-    options: &ValidateOptions,
-) -> Result<ValidatedCharts, SegmentError> {
-    validate_charts_with_monitor(mesh, seg, options, &mut |_| ControlFlow::Continue(()))
+    options: &ParameterizeOptions,
+) -> Result<ParameterizedCharts, SegmentError> {
+    parameterize_charts_with_monitor(mesh, seg, options, &mut |_| ControlFlow::Continue(()))
 }
 
-/// [`validate_charts`] with a progress monitor.
+/// [`parameterize_charts`] with a progress monitor.
 ///
 /// `monitor((done, known))` is called between charts, with the number of charts finished so far
 /// and the number of charts known so far (finished, queued, and parts of splits; it grows as
 /// charts are split, and falls as merge-back removes charts). Returning `Break` stops the work
 /// and returns [`SegmentError::Cancelled`]. The monitor does not change the result.
 ///
-/// Errors: [`SegmentError::InvalidOption`] (see [`ValidateOptions::check`]);
+/// Errors: [`SegmentError::InvalidOption`] (see [`ParameterizeOptions::check`]);
 /// [`SegmentError::Cancelled`].
 /// Cost: one parameterization per chart, plus one per part after each split, plus one per
 /// merge-back try. Charts of one round are flattened in parallel (rayon); results are consumed
 /// in chart order, so the output does not depend on the thread count.
-pub fn validate_charts_with_monitor(
+pub fn parameterize_charts_with_monitor(
     mesh: &TriangleMesh,
     seg: &Segmentation,
-    options: &ValidateOptions,
+    options: &ParameterizeOptions,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
-) -> Result<ValidatedCharts, SegmentError> {
+) -> Result<ParameterizedCharts, SegmentError> {
     options.check()?;
     let mut stats: SegmentStats = seg.stats;
     // Each pending chart carries the map of the chart it was split from, if any: its
@@ -263,7 +199,7 @@ pub fn validate_charts_with_monitor(
         .faces()
         .filter(|&f| mesh.face_degeneracy(f).is_some())
         .count();
-    Ok(ValidatedCharts {
+    Ok(ParameterizedCharts {
         segmentation,
         maps: done.into_iter().map(|(_, m)| Some(m)).collect(),
         unresolved,
@@ -307,12 +243,12 @@ pub(super) fn process_chart(
     mesh: &TriangleMesh,
     faces: &[FaceId],
     parent: Option<&LocatedMap>,
-    options: &ValidateOptions,
+    options: &ParameterizeOptions,
 ) -> Step {
     let outcome = parent
         .and_then(|p| restrict_map(mesh, faces, p, options))
         .map(|map| Attempt::Mapped { map, defect: None })
-        .unwrap_or_else(|| flatten_chart(mesh, faces, options));
+        .unwrap_or_else(|| flatten_around_degenerate(mesh, faces, options));
     let (map, defect) = match outcome {
         Attempt::Mapped { map, defect } => (Some(map), defect),
         Attempt::NotADiskWithoutDegenerate => {

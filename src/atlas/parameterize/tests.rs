@@ -286,18 +286,18 @@ fn validation_splits_a_self_overlapping_helix_strip() {
     let one = finish(&mesh, vec![all.clone()], SegmentStats::default());
     // The whole strip, flattened, overlaps itself (checked by brute force).
     let (cm, _) = chart_mesh(&mesh, &all);
-    let map = crate::atlas::parameterize::parameterize_chart(&cm, &Default::default())
+    let map = crate::atlas::parameterize::flatten_chart(&cm, &Default::default())
         .expect("the strip is a disk");
     assert!(
         brute_force_crossing(&cm, &map.uv),
         "test premise: the strip overlaps"
     );
     assert!(boundary_crossing(&cm, &map.uv).is_some());
-    let opts = ValidateOptions {
+    let opts = ParameterizeOptions {
         max_area_ratio: None,
         ..Default::default()
     };
-    let v = validate_charts(&mesh, &one, &opts).expect("valid options");
+    let v = parameterize_charts(&mesh, &one, &opts).expect("valid options");
     assert!(v.splits[1] >= 1, "{:?}", v.splits);
     assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
     assert_contract(&mesh, &v.segmentation);
@@ -323,10 +323,10 @@ fn validation_bounds_the_area_ratio() {
         .collect();
     let seg = finish(&mesh, vec![north.clone(), south], SegmentStats::default());
     let (cm, _) = chart_mesh(&mesh, &north);
-    let map = crate::atlas::parameterize::parameterize_chart(&cm, &Default::default())
+    let map = crate::atlas::parameterize::flatten_chart(&cm, &Default::default())
         .expect("a hemisphere is a disk");
     assert!(area_ratio(&cm, &map.uv) > 2.0, "test premise");
-    let v = validate_charts(&mesh, &seg, &ValidateOptions::paper()).expect("valid options");
+    let v = parameterize_charts(&mesh, &seg, &ParameterizeOptions::paper()).expect("valid options");
     assert!(v.splits[2] >= 2, "{:?}", v.splits);
     assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
     // Bookkeeping: every split adds a chart (the disk guarantee may add more), every merge
@@ -351,11 +351,11 @@ fn uv_area(uv: &[[f64; 2]], t: [u32; 3]) -> f64 {
     0.5 * ((q[0] - p[0]) * (r[1] - p[1]) - (r[0] - p[0]) * (q[1] - p[1]))
 }
 
-/// The `maps` contract of [`ValidatedCharts`]: every chart has a map, its vertex list is the
+/// The `maps` contract of [`ParameterizedCharts`]: every chart has a map, its vertex list is the
 /// chart's [`chart_mesh`] vertex list, UVs are finite, every non-degenerate face has a positive
 /// UV area and every zero-area face a UV area within rounding of 0 (relative to the chart's UV
 /// extent). Returns the number of zero-area faces seen.
-fn assert_maps_contract(mesh: &TriangleMesh, v: &ValidatedCharts) -> usize {
+fn assert_maps_contract(mesh: &TriangleMesh, v: &ParameterizedCharts) -> usize {
     assert_eq!(v.maps.len(), v.segmentation.num_charts());
     let mut zero_area = 0;
     for (i, (c, m)) in v.segmentation.charts.iter().zip(&v.maps).enumerate() {
@@ -423,7 +423,7 @@ fn every_chart_gets_a_map_even_with_zero_area_faces() {
     let all: Vec<FaceId> = mesh.faces().collect();
     check_chart_is_disk(&mesh, &all).expect("premise: the whole grid is a disk");
     let seg = finish(&mesh, vec![all], SegmentStats::default());
-    let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid");
+    let v = parameterize_charts(&mesh, &seg, &ParameterizeOptions::default()).expect("valid");
     assert_contract(&mesh, &v.segmentation);
     assert_eq!(assert_maps_contract(&mesh, &v), 2);
     assert_eq!(v.degenerate_faces, 2);
@@ -456,7 +456,7 @@ fn every_chart_gets_a_map_even_with_zero_area_faces() {
     // Deterministic.
     assert_eq!(
         v,
-        validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid")
+        parameterize_charts(&mesh, &seg, &ParameterizeOptions::default()).expect("valid")
     );
 }
 
@@ -464,18 +464,18 @@ fn every_chart_gets_a_map_even_with_zero_area_faces() {
 fn validation_maps_degenerate_fixture_charts_and_rejects_bad_ratio() {
     let mesh = build(&fixtures::degenerate());
     let seg = segment(&mesh);
-    let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid");
+    let v = parameterize_charts(&mesh, &seg, &ParameterizeOptions::default()).expect("valid");
     assert_contract(&mesh, &v.segmentation);
     // Face 2 is zero-area and glued to face 0; faces 3 and 4 repeat a vertex (isolated, all
     // degenerate: the line map). All of them get maps, none is unresolved.
     assert_eq!(assert_maps_contract(&mesh, &v), 3);
     assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
-    let bad = ValidateOptions {
+    let bad = ParameterizeOptions {
         max_area_ratio: Some(0.5),
         ..Default::default()
     };
     assert!(matches!(
-        validate_charts(&mesh, &seg, &bad),
+        parameterize_charts(&mesh, &seg, &bad),
         Err(SegmentError::InvalidOption {
             option: "max_area_ratio",
             ..
@@ -488,27 +488,29 @@ fn the_monitor_sees_every_chart_and_can_cancel() {
     let mesh = build(&fixtures::uv_sphere(16, 24, 1.0));
     let seg = segment(&mesh);
     let mut calls: Vec<(usize, usize)> = Vec::new();
-    let v = validate_charts_with_monitor(&mesh, &seg, &ValidateOptions::default(), &mut |p| {
-        calls.push(p);
-        ControlFlow::Continue(())
-    })
-    .expect("valid");
+    let v =
+        parameterize_charts_with_monitor(&mesh, &seg, &ParameterizeOptions::default(), &mut |p| {
+            calls.push(p);
+            ControlFlow::Continue(())
+        })
+        .expect("valid");
     assert!(calls.len() >= seg.num_charts(), "{calls:?}");
     assert!(calls.iter().all(|&(d, k)| d <= k), "{calls:?}");
     assert_eq!(
         v,
-        validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid"),
+        parameterize_charts(&mesh, &seg, &ParameterizeOptions::default()).expect("valid"),
         "the monitor does not change the result"
     );
     let mut n = 0;
-    let r = validate_charts_with_monitor(&mesh, &seg, &ValidateOptions::default(), &mut |_| {
-        n += 1;
-        if n > 1 {
-            ControlFlow::Break(())
-        } else {
-            ControlFlow::Continue(())
-        }
-    });
+    let r =
+        parameterize_charts_with_monitor(&mesh, &seg, &ParameterizeOptions::default(), &mut |_| {
+            n += 1;
+            if n > 1 {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        });
     assert_eq!(r, Err(SegmentError::Cancelled));
 }
 
@@ -564,14 +566,15 @@ fn validation_bounds_the_chart_stretch_by_default() {
         .collect();
     let seg = finish(&mesh, vec![north.clone(), south], SegmentStats::default());
     let (cm, _) = chart_mesh(&mesh, &north);
-    let map = crate::atlas::parameterize::parameterize_chart(&cm, &Default::default())
+    let map = crate::atlas::parameterize::flatten_chart(&cm, &Default::default())
         .expect("a hemisphere is a disk");
-    let bound = ValidateOptions::default()
+    let bound = ParameterizeOptions::default()
         .max_stretch
         .expect("a default bound");
     let l2 = chart_stretch(&cm, &map.uv);
     assert!(l2 > bound, "test premise: {l2}");
-    let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid options");
+    let v =
+        parameterize_charts(&mesh, &seg, &ParameterizeOptions::default()).expect("valid options");
     assert!(v.splits[2] >= 1, "{:?}", v.splits);
     assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
     assert_contract(&mesh, &v.segmentation);
@@ -583,17 +586,17 @@ fn validation_bounds_the_chart_stretch_by_default() {
         assert!(l2 <= bound + 1e-9, "chart of {} faces has L2 {l2}", c.len());
     }
     for bad in [
-        ValidateOptions {
+        ParameterizeOptions {
             max_stretch: Some(0.9),
             ..Default::default()
         },
-        ValidateOptions {
+        ParameterizeOptions {
             area_ratio_trim: 0.5,
             ..Default::default()
         },
     ] {
         assert!(matches!(
-            validate_charts(&mesh, &seg, &bad),
+            parameterize_charts(&mesh, &seg, &bad),
             Err(SegmentError::InvalidOption { .. })
         ));
     }
@@ -699,11 +702,11 @@ fn sock_chart_is_split_lengthwise_from_its_rim_into_two_flat_halves() {
     let mesh = build(&finger(24, 12, 6, 1.0, 4.0));
     let all: Vec<FaceId> = mesh.faces().collect();
     check_chart_is_disk(&mesh, &all).expect("a finger is a disk");
-    let bound = ValidateOptions::default()
+    let bound = ParameterizeOptions::default()
         .max_stretch
         .expect("a default bound");
     let (cm, _) = chart_mesh(&mesh, &all);
-    let map = crate::atlas::parameterize::parameterize_chart(&cm, &Default::default())
+    let map = crate::atlas::parameterize::flatten_chart(&cm, &Default::default())
         .expect("a disk flattens");
     let whole = chart_stretch(&cm, &map.uv);
     assert!(
@@ -732,7 +735,7 @@ fn sock_chart_is_split_lengthwise_from_its_rim_into_two_flat_halves() {
             all.len()
         );
         let (cm, _) = chart_mesh(&mesh, half);
-        let map = crate::atlas::parameterize::parameterize_chart(&cm, &Default::default())
+        let map = crate::atlas::parameterize::flatten_chart(&cm, &Default::default())
             .expect("a disk flattens");
         let l2 = chart_stretch(&cm, &map.uv);
         assert!(
@@ -743,7 +746,8 @@ fn sock_chart_is_split_lengthwise_from_its_rim_into_two_flat_halves() {
     }
     // The whole validation: the sock leaves as at most two charts, each within the bound.
     let seg = finish(&mesh, vec![all.clone()], SegmentStats::default());
-    let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("valid options");
+    let v =
+        parameterize_charts(&mesh, &seg, &ParameterizeOptions::default()).expect("valid options");
     assert_contract(&mesh, &v.segmentation);
     assert_maps_contract(&mesh, &v);
     assert!(
@@ -775,24 +779,24 @@ fn merge_back_respects_the_chart_size_bound() {
         strips[(y / 3.0) as usize].push(f);
     }
     let seg = finish(&mesh, strips, SegmentStats::default());
-    let largest = |v: &ValidatedCharts| v.segmentation.charts.iter().map(Vec::len).max();
-    let unbounded = ValidateOptions {
+    let largest = |v: &ParameterizedCharts| v.segmentation.charts.iter().map(Vec::len).max();
+    let unbounded = ParameterizeOptions {
         merge_passes: 8,
         merge_max_chart_fraction: None,
         ..Default::default()
     };
-    let free = validate_charts(&mesh, &seg, &unbounded).expect("valid options");
+    let free = parameterize_charts(&mesh, &seg, &unbounded).expect("valid options");
     assert!(
         largest(&free) > Some(MERGE_CAP_FLOOR_FACES),
         "test premise: unbounded merging makes a chart above the floor, {:?}",
         largest(&free)
     );
     for (fraction, limit) in [(0.1, MERGE_CAP_FLOOR_FACES), (0.5, 6_000)] {
-        let bounded = ValidateOptions {
+        let bounded = ParameterizeOptions {
             merge_max_chart_fraction: Some(fraction),
             ..unbounded
         };
-        let v = validate_charts(&mesh, &seg, &bounded).expect("valid options");
+        let v = parameterize_charts(&mesh, &seg, &bounded).expect("valid options");
         assert!(v.merges > 0, "{fraction}: no merge at all");
         assert!(
             largest(&v) <= Some(limit),
@@ -804,10 +808,13 @@ fn merge_back_respects_the_chart_size_bound() {
         assert_maps_contract(&mesh, &v);
     }
     for bad in [0.0, -0.1, 1.5, f64::NAN] {
-        let o = ValidateOptions {
+        let o = ParameterizeOptions {
             merge_max_chart_fraction: Some(bad),
             ..Default::default()
         };
-        assert!(validate_charts(&mesh, &seg, &o).is_err(), "{bad} accepted");
+        assert!(
+            parameterize_charts(&mesh, &seg, &o).is_err(),
+            "{bad} accepted"
+        );
     }
 }

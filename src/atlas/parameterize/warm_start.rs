@@ -1,7 +1,15 @@
-//! Warm start of split parts.
+//! Warm start of split parts: a part of a split chart first tries the restriction of its
+//! parent's map to its faces ([`restrict_map`]); when that passes every test of
+//! [`super::defects`], the part keeps it and is not flattened.
+//!
+//! It is not the part's LSCM map (that is usually a little less stretched), but a valid map by
+//! the same tests as a fresh one. Parts with zero-area faces are always flattened. It applies
+//! mostly to overlap splits: a part of an over-stretched map is usually still over-stretched.
 use super::defects::find_defect;
 use super::degenerate::is_degenerate;
-use super::{chart_mesh, conformal_energy, flipped_faces, ChartMap, LocatedMap, ValidateOptions};
+use super::{
+    chart_mesh, conformal_energy, flipped_faces, ChartMap, LocatedMap, ParameterizeOptions,
+};
 use crate::mesh::{FaceId, TriangleMesh, VertexId};
 
 /// The parent's map restricted to the part `faces` (ascending) of it, if that is a valid map
@@ -14,7 +22,7 @@ pub(super) fn restrict_map(
     mesh: &TriangleMesh,
     faces: &[FaceId],
     parent: &LocatedMap,
-    options: &ValidateOptions,
+    options: &ParameterizeOptions,
 ) -> Option<LocatedMap> {
     if faces.iter().any(|&f| is_degenerate(mesh, f)) {
         return None;

@@ -28,7 +28,7 @@
 //! Code map: [`options`] (every option, unit, default), [`features`] (§3.1, Algorithm 1),
 //! [`grow`] (§3.2, Algorithm 2), [`sock`] (§3.2 sock-shaped charts: the lengthwise split seeds
 //! the validation uses for an over-stretched chart squeezed at its tip), [`validate`] (§3.3: flatten every chart, split the invalid
-//! ones, merge back; [`validate_charts_with_monitor`] reports progress and can be cancelled;
+//! ones, merge back; [`parameterize_charts_with_monitor`] reports progress and can be cancelled;
 //! every chart leaves it with a map, zero-area faces included), this file (the disk guarantee,
 //! the chart-count cap, the [`ChartMesh`] extraction for the parameterizer).
 //!
