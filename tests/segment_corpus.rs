@@ -17,6 +17,7 @@ use texatlas::atlas::parameterize::{
     chart_mesh, parameterize_charts, ChartDefect, ParameterizeOptions, ParameterizedCharts,
 };
 use texatlas::atlas::segment::{check_chart_is_disk, segment_charts, SegmentOptions};
+use texatlas::atlas::{Stage, StageProgress};
 use texatlas::gltf_io::{decode, DecodeLimits, Resources};
 use texatlas::mesh::TriangleMesh;
 
@@ -51,7 +52,12 @@ fn segment_every_corpus_mesh() {
             .expect("builds")
             .mesh;
         let t = Instant::now();
-        let seg = segment_charts(&mesh, &SegmentOptions::default()).expect("default options");
+        let seg = segment_charts(
+            &mesh,
+            &SegmentOptions::default(),
+            &mut StageProgress::ignored(Stage::Segment),
+        )
+        .expect("default options");
         let ms = t.elapsed().as_secs_f64() * 1e3;
         let largest = seg.charts.iter().map(Vec::len).max().unwrap_or(0);
         let name = path
@@ -85,7 +91,13 @@ fn segment_every_corpus_mesh() {
         }
         for (run, options) in runs {
             let t = Instant::now();
-            let v = parameterize_charts(&mesh, &seg, &options).expect("valid");
+            let v = parameterize_charts(
+                &mesh,
+                &seg,
+                &options,
+                &mut StageProgress::ignored(Stage::Parameterize),
+            )
+            .expect("valid");
             let ms = t.elapsed().as_secs_f64() * 1e3;
             let largest = v
                 .segmentation

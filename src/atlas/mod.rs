@@ -33,11 +33,11 @@ use std::ops::ControlFlow;
 pub use measure::{measure_atlas, AtlasReport, MeasureInput};
 pub use options::AtlasOptions;
 pub use pack::{pack_charts, PackChart, PackError, PackOptions, TexelDensity};
-pub use progress::{NoProgress, Progress, Stage};
+pub use progress::{NoProgress, Progress, ProgressFn, Stage, StageProgress};
 
 use crate::mesh::{TriangleMesh, VertexId};
 use pack::Packing;
-use parameterize::{parameterize_charts_with_monitor, ChartDefect};
+use parameterize::{parameterize_charts, ChartDefect, ParameterizeChartsError};
 use segment::{segment_charts, SegmentError};
 
 /// Errors of [`generate`]. Each says what is wrong and how to fix it.
@@ -78,8 +78,20 @@ impl From<SegmentError> for AtlasError {
             SegmentError::InvalidOption { option, detail } => {
                 AtlasError::InvalidOption { option, detail }
             }
-            // Only `generate`'s own stages can be cancelled, and it maps this with the stage.
             SegmentError::Cancelled => AtlasError::Cancelled {
+                stage: Stage::Segment,
+            },
+        }
+    }
+}
+
+impl From<ParameterizeChartsError> for AtlasError {
+    fn from(e: ParameterizeChartsError) -> Self {
+        match e {
+            ParameterizeChartsError::InvalidOption { option, detail } => {
+                AtlasError::InvalidOption { option, detail }
+            }
+            ParameterizeChartsError::Cancelled => AtlasError::Cancelled {
                 stage: Stage::Parameterize,
             },
         }
@@ -179,9 +191,11 @@ pub fn generate(
 
     // 1. Segment.
     progress.stage_started(Stage::Segment);
-    check(progress.advance(Stage::Segment, 0, 1), Stage::Segment)?;
-    let seg = segment_charts(mesh, &options.segment)?;
-    check(progress.advance(Stage::Segment, 1, 1), Stage::Segment)?;
+    let seg = segment_charts(
+        mesh,
+        &options.segment,
+        &mut StageProgress::new(Stage::Segment, progress),
+    )?;
     progress.stage_finished(Stage::Segment);
 
     // 2. Parameterize and validate.
@@ -190,16 +204,12 @@ pub fn generate(
         progress.advance(Stage::Parameterize, 0, seg.num_charts()),
         Stage::Parameterize,
     )?;
-    let validated =
-        parameterize_charts_with_monitor(mesh, &seg, &options.parameterize, &mut |(d, t)| {
-            progress.advance(Stage::Parameterize, d, t)
-        })
-        .map_err(|e| match e {
-            SegmentError::Cancelled => AtlasError::Cancelled {
-                stage: Stage::Parameterize,
-            },
-            other => other.into(),
-        })?;
+    let validated = parameterize_charts(
+        mesh,
+        &seg,
+        &options.parameterize,
+        &mut StageProgress::new(Stage::Parameterize, progress),
+    )?;
     let n = validated.segmentation.charts.len();
     check(
         progress.advance(Stage::Parameterize, n, n),
@@ -423,6 +433,7 @@ fn cut_for_packing(
             mesh,
             &seg,
             &validate_options,
+            &mut StageProgress::ignored(Stage::Parameterize),
         )?)
     };
     let area = |c: &[crate::mesh::FaceId]| -> f64 { c.iter().map(|&f| mesh.face_area_m2(f)).sum() };

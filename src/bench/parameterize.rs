@@ -28,6 +28,7 @@ use crate::atlas::parameterize::lscm::{diameter_pins, LscmSystem};
 use crate::atlas::parameterize::{
     conformal_energy, flatten_chart, flipped_faces, FlattenOptions, ParameterizeMethod,
 };
+use crate::atlas::{Stage, StageProgress};
 use crate::numerics::CgOptions;
 
 /// The three benchmarked methods.
@@ -251,7 +252,11 @@ pub fn run_method(
                 method: ParameterizeMethod::Direct,
                 ..FlattenOptions::default()
             };
-            let map = flatten_chart(chart, &options)?;
+            let map = flatten_chart(
+                chart,
+                &options,
+                &mut StageProgress::ignored(Stage::Parameterize),
+            )?;
             (map.uv, map.iterations, true, Vec::new())
         }
         BenchMethod::Hlscm => {
@@ -263,7 +268,8 @@ pub fn run_method(
             let t0 = Instant::now();
             let hierarchy = build_hierarchy(chart, &topology, &pins, &options)?;
             let t1 = Instant::now();
-            let (uv, report) = hierarchy.solve(&options, &mut |_| ControlFlow::Continue(()))?;
+            let (uv, report) =
+                hierarchy.solve(&options, &mut StageProgress::ignored(Stage::Parameterize))?;
             let t2 = Instant::now();
             phases = vec![
                 ("validate+pins".to_string(), (t0 - start).as_secs_f64()),

@@ -152,7 +152,12 @@ pub fn mixed_set(n: usize, seed: u64) -> Vec<OwnedChart> {
 /// Flattens a 3-D chart with LSCM ([`flatten_chart`]); the area is the 3-D area.
 /// Panics if the chart cannot be parameterized (test data only).
 pub fn parameterized(chart: &ChartMesh) -> OwnedChart {
-    let map = flatten_chart(chart, &FlattenOptions::default()).expect("test chart flattens");
+    let map = flatten_chart(
+        chart,
+        &FlattenOptions::default(),
+        &mut crate::atlas::StageProgress::ignored(crate::atlas::Stage::Parameterize),
+    )
+    .expect("test chart flattens");
     let area_m2 = chart
         .triangles
         .iter()

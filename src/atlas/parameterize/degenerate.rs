@@ -13,10 +13,11 @@
 //!
 //! Units: UVs in model units. Pure functions, called in parallel.
 use super::defects::{find_defect, ChartDefect};
+use super::flatten::flatten_chart_with_topology;
 use super::{
-    chart_mesh, flatten_chart_with_topology, ChartMap, LocatedMap, ParameterizeError,
-    ParameterizeMethod, ParameterizeOptions,
+    chart_mesh, ChartMap, LocatedMap, ParameterizeError, ParameterizeMethod, ParameterizeOptions,
 };
+use crate::atlas::progress::{Stage, StageProgress};
 use crate::atlas::segment::{disk_check, enforce_disks, SegmentStats};
 use crate::mesh::{FaceId, TriangleMesh, VertexId};
 
@@ -70,7 +71,11 @@ pub(super) fn flatten_around_degenerate(
             return Attempt::NotADiskWithoutDegenerate;
         }
         let (cm, global) = chart_mesh(mesh, &kept);
-        match flatten_chart_with_topology(&cm, &options.flatten) {
+        match flatten_chart_with_topology(
+            &cm,
+            &options.flatten,
+            &mut StageProgress::ignored(Stage::Parameterize),
+        ) {
             Ok((map, topology)) => {
                 let defect = find_defect(&kept, &cm, &topology.boundary_loop, &map, options);
                 let map = if kept.len() == faces.len() {

@@ -9,12 +9,12 @@
 //!
 //! Units: positions and UVs in model units (the second pin sits at the pins' path length from
 //! the first), not normalized.
-use std::ops::ControlFlow;
 
 use super::{
     conformal_energy, flipped_faces, hlscm, lscm, ChartMesh, ChartTopology, HlscmOptions,
     HlscmReport, LscmSystem, ParameterizeError,
 };
+use crate::atlas::progress::StageProgress;
 use crate::numerics::CgOptions;
 
 /// Which solver flattens a chart.
@@ -91,40 +91,28 @@ impl ChartMap {
 
 /// Flattens one chart. See the module doc for the guarantees.
 ///
+/// `progress` receives `(done, cap)` CG iterations on the iterative paths (the direct solve has
+/// no checkpoint); `Break` cancels with [`ParameterizeError::Cancelled`]. Pass
+/// [`StageProgress::ignored`] for no reporting.
+///
 /// Errors: any defect of the chart (see [`ChartMesh::validate`]) or a solver failure.
 pub fn flatten_chart(
     chart: &ChartMesh,
     options: &FlattenOptions,
+    progress: &mut StageProgress<'_>,
 ) -> Result<ChartMap, ParameterizeError> {
-    flatten_chart_with_monitor(chart, options, &mut |_| ControlFlow::Continue(()))
-}
-
-/// [`flatten_chart`] with a monitor called with `(done, total)` CG iterations on the
-/// iterative paths; returning `Break` cancels with [`ParameterizeError::Cancelled`]. This is
-/// where the pipeline's `Progress` trait plugs in.
-pub fn flatten_chart_with_monitor(
-    chart: &ChartMesh,
-    options: &FlattenOptions,
-    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
-) -> Result<ChartMap, ParameterizeError> {
-    let topology = chart.validate()?;
-    flatten_validated(chart, &topology, options, monitor)
+    flatten_chart_with_topology(chart, options, progress).map(|(map, _)| map)
 }
 
 /// [`flatten_chart`], also returning the chart's connectivity (computed once, by
-/// [`ChartMesh::validate`]), for callers that inspect the map further (chart validation reads
-/// the boundary loop).
-pub fn flatten_chart_with_topology(
+/// [`ChartMesh::validate`]), for the stage, which reads the boundary loop.
+pub(super) fn flatten_chart_with_topology(
     chart: &ChartMesh,
     options: &FlattenOptions,
+    progress: &mut StageProgress<'_>,
 ) -> Result<(ChartMap, ChartTopology), ParameterizeError> {
     let topology = chart.validate()?;
-    let map = flatten_validated(
-        chart,
-        &topology,
-        options,
-        &mut |_| ControlFlow::Continue(()),
-    )?;
+    let map = flatten_validated(chart, &topology, options, progress)?;
     Ok((map, topology))
 }
 
@@ -133,7 +121,7 @@ fn flatten_validated(
     chart: &ChartMesh,
     topology: &ChartTopology,
     options: &FlattenOptions,
-    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
+    progress: &mut StageProgress<'_>,
 ) -> Result<ChartMap, ParameterizeError> {
     let pins = lscm::diameter_pins(chart, topology);
     let method = match options.method {
@@ -157,7 +145,7 @@ fn flatten_validated(
             let mut cancelled = false;
             let total = options.cg.max_iterations;
             let outcome = system.solve_cg(&mut x, &options.cg, &mut |step| {
-                let flow = monitor((step.iteration, total));
+                let flow = progress.advance(step.iteration, total);
                 cancelled = flow.is_break();
                 flow
             })?;
@@ -167,7 +155,8 @@ fn flatten_validated(
             (system.uv_from_solution(&x), outcome.iterations, None)
         }
         ParameterizeMethod::Hierarchical => {
-            let (uv, report) = hlscm::solve_hlscm(chart, topology, &pins, &options.hlscm, monitor)?;
+            let (uv, report) =
+                hlscm::solve_hlscm(chart, topology, &pins, &options.hlscm, progress)?;
             (uv, report.finest_iterations, Some(report))
         }
     };

@@ -86,6 +86,8 @@
 //! 2.6151135e-5).
 use std::ops::ControlFlow;
 
+use crate::atlas::progress::StageProgress;
+
 use rayon::prelude::*;
 
 use crate::numerics::{
@@ -797,12 +799,12 @@ impl HlscmHierarchy {
             .collect()
     }
 
-    /// Cascadic solve (hlscm-2003 §3.3, §4.1). `monitor` receives `(finest-level iterations
+    /// Cascadic solve (hlscm-2003 §3.3, §4.1). `progress` receives `(finest-level iterations
     /// done, cap)`; `Break` cancels. Returns UVs per chart vertex.
     pub fn solve(
         &self,
         options: &HlscmOptions,
-        monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
+        progress: &mut StageProgress<'_>,
     ) -> Result<(Vec<[f64; 2]>, HlscmReport), ParameterizeError> {
         let n = self.pm.vertex_count;
         let mut uv = vec![[0.0f64; 2]; n];
@@ -845,7 +847,10 @@ impl HlscmHierarchy {
                     if !finest {
                         return ControlFlow::Continue(());
                     }
-                    if monitor((step.iteration, cg.max_iterations)).is_break() {
+                    if progress
+                        .advance(step.iteration, cg.max_iterations)
+                        .is_break()
+                    {
                         cancelled = true;
                         return ControlFlow::Break(());
                     }
@@ -922,9 +927,9 @@ pub fn solve_hlscm(
     topology: &ChartTopology,
     pins: &[Pin],
     options: &HlscmOptions,
-    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
+    progress: &mut StageProgress<'_>,
 ) -> Result<(Vec<[f64; 2]>, HlscmReport), ParameterizeError> {
-    build_hierarchy(chart, topology, pins, options)?.solve(options, monitor)
+    build_hierarchy(chart, topology, pins, options)?.solve(options, progress)
 }
 
 #[cfg(test)]
@@ -932,6 +937,7 @@ mod tests {
     use super::super::lscm::{conformal_energy, diameter_pins, flipped_faces};
     use super::super::test_meshes::{hemisphere, noisy_height_field};
     use super::*;
+    use crate::atlas::progress::Stage;
 
     fn direct_energy(chart: &ChartMesh) -> f64 {
         let topo = chart.validate().expect("disk");
@@ -959,7 +965,7 @@ mod tests {
                 assert!((7.0..=13.0).contains(&ratio), "{sizes:?}");
             }
             let (uv, report) = hierarchy
-                .solve(&options, &mut |_| ControlFlow::Continue(()))
+                .solve(&options, &mut StageProgress::ignored(Stage::Parameterize))
                 .expect("hlscm");
             assert!(report.levels.len() >= 2, "{report:?}");
             assert!(report.converged, "{report:?}");
@@ -986,9 +992,13 @@ mod tests {
             final_tolerance: 1e-10,
             ..HlscmOptions::default()
         };
-        let (uv, report) = solve_hlscm(&chart, &topo, &pins, &options, &mut |_| {
-            ControlFlow::Continue(())
-        })
+        let (uv, report) = solve_hlscm(
+            &chart,
+            &topo,
+            &pins,
+            &options,
+            &mut StageProgress::ignored(Stage::Parameterize),
+        )
         .expect("hlscm");
         assert!(report.levels.len() >= 2 && report.converged, "{report:?}");
         let (e, e_direct) = (conformal_energy(&chart, &uv), direct_energy(&chart));
@@ -1061,9 +1071,13 @@ mod tests {
         let chart = noisy_height_field(8, 0.3, 4);
         let topo = chart.validate().expect("disk");
         let pins = diameter_pins(&chart, &topo);
-        let (uv, report) = solve_hlscm(&chart, &topo, &pins, &HlscmOptions::default(), &mut |_| {
-            ControlFlow::Continue(())
-        })
+        let (uv, report) = solve_hlscm(
+            &chart,
+            &topo,
+            &pins,
+            &HlscmOptions::default(),
+            &mut StageProgress::ignored(Stage::Parameterize),
+        )
         .expect("hlscm");
         assert_eq!(report.levels.len(), 1);
         let e = conformal_energy(&chart, &uv);

@@ -7,16 +7,16 @@
 //! differently ([`shared_arc_misfit`] above `MERGE_MAX_ARC_MISFIT`) is not flattened: such
 //! unions fail the tests anyway. Deterministic: the pass is sequential; the speculative
 //! flattening of [`super::schedule`] never changes its result.
-use std::ops::ControlFlow;
-
 use super::defects::find_defect;
 use super::degenerate::{flatten_around_degenerate, is_degenerate, Attempt};
 use super::schedule::{MergeKey, Speculation, SPECULATION_CHARTS_PER_THREAD};
+use super::ParameterizeChartsError;
 use super::{
     chart_mesh, conformal_energy, flipped_faces, lscm, ChartMap, LocatedMap, ParameterizeOptions,
     Pin, LATE_MERGE_MAX_FACES, MERGE_CAP_FLOOR_FACES,
 };
-use crate::atlas::segment::{disk_check, SegmentError};
+use crate::atlas::progress::StageProgress;
+use crate::atlas::segment::disk_check;
 use crate::mesh::{FaceId, TriangleMesh, VertexId};
 
 /// Merges valid charts into a neighbour while the merged chart is still a disk and still valid,
@@ -34,8 +34,8 @@ pub(super) fn merge_back(
     done: &mut Vec<(Vec<FaceId>, LocatedMap)>,
     unresolved: &std::collections::BTreeSet<FaceId>,
     options: &ParameterizeOptions,
-    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
-) -> Result<usize, SegmentError> {
+    progress: &mut StageProgress<'_>,
+) -> Result<usize, ParameterizeChartsError> {
     let valid: Vec<bool> = done
         .iter()
         .map(|(f, _)| !unresolved.contains(&f[0]))
@@ -166,7 +166,7 @@ pub(super) fn merge_back(
             Attempt::Mapped { map, defect: None } => Some(map),
             _ => None,
         };
-        let outcome: Result<(), SegmentError> = rayon::in_place_scope(|scope| {
+        let outcome: Result<(), ParameterizeChartsError> = rayon::in_place_scope(|scope| {
             let (spec, flatten_ok) = (&spec, &flatten_ok);
             let mut queued = 0usize;
             for (p, &i) in order.iter().enumerate() {
@@ -205,9 +205,9 @@ pub(super) fn merge_back(
                         continue;
                     }
                     let known = done.len() - merges;
-                    if monitor((known, known)).is_break() {
+                    if progress.advance(known, known).is_break() {
                         spec.clear();
-                        return Err(SegmentError::Cancelled);
+                        return Err(ParameterizeChartsError::Cancelled);
                     }
                     let union = union_of(i, j, done);
                     let result = match spec.take(&k, flatten_ok) {

@@ -57,20 +57,33 @@ mod tests;
 pub use chart::{ChartMesh, ChartTopology};
 pub use defects::{boundary_crossing, vertex_fold, ChartDefect};
 pub use extract::chart_mesh;
-pub use flatten::{
-    flatten_chart, flatten_chart_with_monitor, flatten_chart_with_topology, ChartMap,
-    FlattenOptions, ParameterizeMethod,
-};
+pub use flatten::{flatten_chart, ChartMap, FlattenOptions, ParameterizeMethod};
 pub use hlscm::{HlscmLevel, HlscmOptions, HlscmReport, HlscmSmoother};
 pub use lscm::{conformal_energy, flipped_faces, LscmSystem, Pin};
 pub use options::{ParameterizeOptions, LATE_MERGE_MAX_FACES, MERGE_CAP_FLOOR_FACES};
-pub use stage::{
-    parameterize_charts, parameterize_charts_with_monitor, LocatedMap, ParameterizedCharts,
-};
+pub use stage::{parameterize_charts, LocatedMap, ParameterizedCharts};
 
 use crate::numerics::{CholeskyError, SparseError};
 
-/// Errors of the parameterization stage. Every variant says what is wrong and how to fix it.
+/// Errors of the parameterize stage ([`parameterize_charts`]). A chart that cannot be flattened
+/// is not one: the stage splits it, or returns it with a map and lists it in `unresolved`.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ParameterizeChartsError {
+    /// An option has a meaningless value.
+    #[error("invalid parameterization option `{option}`: {detail}")]
+    InvalidOption {
+        /// The option's name, e.g. `max_stretch`.
+        option: &'static str,
+        /// What is wrong and what to use instead.
+        detail: String,
+    },
+    /// The caller's [`crate::atlas::StageProgress`] asked to stop.
+    #[error("parameterization was cancelled")]
+    Cancelled,
+}
+
+/// Errors of flattening one chart ([`flatten_chart`]). Every variant says what is wrong and how
+/// to fix it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ParameterizeError {
     /// The chart has no triangle.
@@ -163,7 +176,7 @@ pub enum ParameterizeError {
     /// The solver produced non-finite UVs.
     #[error("the solver produced non-finite UVs; the chart is too badly conditioned, split it")]
     NonFiniteResult,
-    /// The caller's monitor asked to stop.
+    /// The caller's [`crate::atlas::StageProgress`] asked to stop.
     #[error("parameterization was cancelled")]
     Cancelled,
     /// An internal invariant broke (a bug, reported rather than panicking).

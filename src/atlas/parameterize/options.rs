@@ -6,7 +6,7 @@
 //! option uses 0 to mean "unlimited" (`Option` does). Units: ratios are plain ratios, fractions
 //! are of the mesh's face count, counts are counts.
 use super::FlattenOptions;
-use crate::atlas::segment::SegmentError;
+use super::ParameterizeChartsError;
 
 /// Options of [`parameterize_charts`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -83,17 +83,17 @@ impl ParameterizeOptions {
     }
 
     /// Rejects meaningless values, naming the option and how to fix it.
-    pub fn check(&self) -> Result<(), SegmentError> {
+    pub fn check(&self) -> Result<(), ParameterizeChartsError> {
         if let Some(r) = self.max_area_ratio {
             if !(r >= 1.0 && r.is_finite()) {
-                return Err(SegmentError::InvalidOption {
+                return Err(ParameterizeChartsError::InvalidOption {
                     option: "max_area_ratio",
                     detail: format!("{r} is not a finite ratio >= 1; use e.g. 2.0, or None"),
                 });
             }
         }
         if !(self.area_ratio_trim >= 0.0 && self.area_ratio_trim < 0.5) {
-            return Err(SegmentError::InvalidOption {
+            return Err(ParameterizeChartsError::InvalidOption {
                 option: "area_ratio_trim",
                 detail: format!(
                     "{} is not a fraction in [0, 0.5); use 0 for max / min",
@@ -103,7 +103,7 @@ impl ParameterizeOptions {
         }
         if let Some(r) = self.max_stretch {
             if !(r >= 1.0 && r.is_finite()) {
-                return Err(SegmentError::InvalidOption {
+                return Err(ParameterizeChartsError::InvalidOption {
                     option: "max_stretch",
                     detail: format!("{r} is not a finite ratio >= 1; use e.g. 1.1, or None"),
                 });
@@ -111,7 +111,7 @@ impl ParameterizeOptions {
         }
         if let Some(f) = self.merge_max_chart_fraction {
             if !(f > 0.0 && f <= 1.0) {
-                return Err(SegmentError::InvalidOption {
+                return Err(ParameterizeChartsError::InvalidOption {
                     option: "merge_max_chart_fraction",
                     detail: format!(
                         "{f} is not a fraction in (0, 1]; use e.g. 0.1, or None for no bound"

@@ -38,7 +38,6 @@
 //!
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.3 (area-ratio threshold 2).
-use std::ops::ControlFlow;
 use std::sync::Arc;
 
 use super::defects::ChartDefect;
@@ -47,10 +46,9 @@ use super::merge::merge_back;
 use super::schedule::in_parallel_largest_first;
 use super::split::split_for;
 use super::warm_start::restrict_map;
-use super::{ChartMap, ParameterizeOptions};
-use crate::atlas::segment::{
-    disk_check, enforce_disks, finish, SegmentError, SegmentStats, Segmentation,
-};
+use super::{ChartMap, ParameterizeChartsError, ParameterizeOptions};
+use crate::atlas::progress::StageProgress;
+use crate::atlas::segment::{disk_check, enforce_disks, finish, SegmentStats, Segmentation};
 use crate::mesh::{FaceId, TriangleMesh};
 
 /// A chart's map and its local → global vertex map (from [`chart_mesh`]).
@@ -83,35 +81,25 @@ pub struct ParameterizedCharts {
     pub merges: usize,
 }
 
-/// Parameterizes every chart of `seg` and splits invalid ones until all are valid (module doc).
+/// The parameterize stage: flattens every chart of `seg`, splits invalid ones until all are
+/// valid, and merges valid charts back (module doc).
 ///
-/// Equivalent to [`parameterize_charts_with_monitor`] with a monitor that never cancels.
+/// `progress` is advanced between charts with `(done, known)`: the charts finished so far and
+/// the charts known so far (finished, queued, and parts of splits; it grows as charts are split,
+/// and falls as the merge-back removes charts). `Break` stops the work and returns
+/// [`ParameterizeChartsError::Cancelled`]. Progress does not change the result.
+///
+/// Errors: [`ParameterizeChartsError::InvalidOption`] (see [`ParameterizeOptions::check`]);
+/// [`ParameterizeChartsError::Cancelled`].
+/// Cost: one parameterization per chart, plus one per part after each split, plus one per
+/// merge-back try. Charts of one round are flattened in parallel (rayon); results are consumed
+/// in chart order, so the output does not depend on the thread count.
 pub fn parameterize_charts(
     mesh: &TriangleMesh,
     seg: &Segmentation,
     options: &ParameterizeOptions,
-) -> Result<ParameterizedCharts, SegmentError> {
-    parameterize_charts_with_monitor(mesh, seg, options, &mut |_| ControlFlow::Continue(()))
-}
-
-/// [`parameterize_charts`] with a progress monitor.
-///
-/// `monitor((done, known))` is called between charts, with the number of charts finished so far
-/// and the number of charts known so far (finished, queued, and parts of splits; it grows as
-/// charts are split, and falls as merge-back removes charts). Returning `Break` stops the work
-/// and returns [`SegmentError::Cancelled`]. The monitor does not change the result.
-///
-/// Errors: [`SegmentError::InvalidOption`] (see [`ParameterizeOptions::check`]);
-/// [`SegmentError::Cancelled`].
-/// Cost: one parameterization per chart, plus one per part after each split, plus one per
-/// merge-back try. Charts of one round are flattened in parallel (rayon); results are consumed
-/// in chart order, so the output does not depend on the thread count.
-pub fn parameterize_charts_with_monitor(
-    mesh: &TriangleMesh,
-    seg: &Segmentation,
-    options: &ParameterizeOptions,
-    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
-) -> Result<ParameterizedCharts, SegmentError> {
+    progress: &mut StageProgress<'_>,
+) -> Result<ParameterizedCharts, ParameterizeChartsError> {
     options.check()?;
     let mut stats: SegmentStats = seg.stats;
     // Each pending chart carries the map of the chart it was split from, if any: its
@@ -136,8 +124,11 @@ pub fn parameterize_charts_with_monitor(
         let round = pending.len();
         let mut next: Vec<(Vec<FaceId>, Option<Arc<LocatedMap>>)> = Vec::new();
         for (k, ((faces, _), step)) in pending.into_iter().zip(steps).enumerate() {
-            if monitor((done.len(), done.len() + round - k + next.len())).is_break() {
-                return Err(SegmentError::Cancelled);
+            if progress
+                .advance(done.len(), done.len() + round - k + next.len())
+                .is_break()
+            {
+                return Err(ParameterizeChartsError::Cancelled);
             }
             // Never reached (each split makes one more chart and there are at most as many
             // charts as faces), but kept so that termination does not rest on that argument.
@@ -185,7 +176,7 @@ pub fn parameterize_charts_with_monitor(
     }
     let unresolved: std::collections::BTreeSet<FaceId> =
         unresolved_faces.iter().map(|(f, _)| *f).collect();
-    let merges = merge_back(mesh, &mut done, &unresolved, options, monitor)?;
+    let merges = merge_back(mesh, &mut done, &unresolved, options, progress)?;
     // Order by lowest face like `segment_charts`, keeping maps aligned. Every chart's faces are
     // already ascending, and its map is in `chart_mesh` order of those faces.
     done.sort_by_key(|(faces, _)| faces[0]);

@@ -8,12 +8,13 @@ use proptest::prelude::*;
 use super::defects::segments_intersect;
 use super::merge::union_arc;
 use super::*;
+use crate::atlas::progress::{ProgressFn, Stage, StageProgress};
 use crate::atlas::segment::tests::{
     assert_contract as assert_segment_contract, build, segment, subdivided_cube,
 };
 use crate::atlas::segment::{
     check_chart_is_disk, enforce_disks, finish, grow_two, segment_charts, Lscm2002Options,
-    NotADisk, SegmentError, SegmentOptions, SegmentStats, Segmentation,
+    NotADisk, SegmentOptions, SegmentStats, Segmentation,
 };
 use crate::mesh::{fixtures, FaceId, MeshInput, TriangleMesh};
 
@@ -194,7 +195,7 @@ proptest! {
             lscm: Lscm2002Options { min_feature_length: 2, ..Default::default() },
             ..Default::default()
         };
-        let seg = segment_charts(&mesh, &opts).expect("valid options");
+        let seg = segment_charts(&mesh, &opts, &mut StageProgress::ignored(Stage::Segment)).expect("valid options");
         assert_contract(&mesh, &seg);
     }
 }
@@ -286,8 +287,12 @@ fn validation_splits_a_self_overlapping_helix_strip() {
     let one = finish(&mesh, vec![all.clone()], SegmentStats::default());
     // The whole strip, flattened, overlaps itself (checked by brute force).
     let (cm, _) = chart_mesh(&mesh, &all);
-    let map = crate::atlas::parameterize::flatten_chart(&cm, &Default::default())
-        .expect("the strip is a disk");
+    let map = crate::atlas::parameterize::flatten_chart(
+        &cm,
+        &Default::default(),
+        &mut StageProgress::ignored(Stage::Parameterize),
+    )
+    .expect("the strip is a disk");
     assert!(
         brute_force_crossing(&cm, &map.uv),
         "test premise: the strip overlaps"
@@ -297,7 +302,13 @@ fn validation_splits_a_self_overlapping_helix_strip() {
         max_area_ratio: None,
         ..Default::default()
     };
-    let v = parameterize_charts(&mesh, &one, &opts).expect("valid options");
+    let v = parameterize_charts(
+        &mesh,
+        &one,
+        &opts,
+        &mut StageProgress::ignored(Stage::Parameterize),
+    )
+    .expect("valid options");
     assert!(v.splits[1] >= 1, "{:?}", v.splits);
     assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
     assert_contract(&mesh, &v.segmentation);
@@ -323,10 +334,20 @@ fn validation_bounds_the_area_ratio() {
         .collect();
     let seg = finish(&mesh, vec![north.clone(), south], SegmentStats::default());
     let (cm, _) = chart_mesh(&mesh, &north);
-    let map = crate::atlas::parameterize::flatten_chart(&cm, &Default::default())
-        .expect("a hemisphere is a disk");
+    let map = crate::atlas::parameterize::flatten_chart(
+        &cm,
+        &Default::default(),
+        &mut StageProgress::ignored(Stage::Parameterize),
+    )
+    .expect("a hemisphere is a disk");
     assert!(area_ratio(&cm, &map.uv) > 2.0, "test premise");
-    let v = parameterize_charts(&mesh, &seg, &ParameterizeOptions::paper()).expect("valid options");
+    let v = parameterize_charts(
+        &mesh,
+        &seg,
+        &ParameterizeOptions::paper(),
+        &mut StageProgress::ignored(Stage::Parameterize),
+    )
+    .expect("valid options");
     assert!(v.splits[2] >= 2, "{:?}", v.splits);
     assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
     // Bookkeeping: every split adds a chart (the disk guarantee may add more), every merge
@@ -423,7 +444,13 @@ fn every_chart_gets_a_map_even_with_zero_area_faces() {
     let all: Vec<FaceId> = mesh.faces().collect();
     check_chart_is_disk(&mesh, &all).expect("premise: the whole grid is a disk");
     let seg = finish(&mesh, vec![all], SegmentStats::default());
-    let v = parameterize_charts(&mesh, &seg, &ParameterizeOptions::default()).expect("valid");
+    let v = parameterize_charts(
+        &mesh,
+        &seg,
+        &ParameterizeOptions::default(),
+        &mut StageProgress::ignored(Stage::Parameterize),
+    )
+    .expect("valid");
     assert_contract(&mesh, &v.segmentation);
     assert_eq!(assert_maps_contract(&mesh, &v), 2);
     assert_eq!(v.degenerate_faces, 2);
@@ -456,7 +483,13 @@ fn every_chart_gets_a_map_even_with_zero_area_faces() {
     // Deterministic.
     assert_eq!(
         v,
-        parameterize_charts(&mesh, &seg, &ParameterizeOptions::default()).expect("valid")
+        parameterize_charts(
+            &mesh,
+            &seg,
+            &ParameterizeOptions::default(),
+            &mut StageProgress::ignored(Stage::Parameterize)
+        )
+        .expect("valid")
     );
 }
 
@@ -464,7 +497,13 @@ fn every_chart_gets_a_map_even_with_zero_area_faces() {
 fn validation_maps_degenerate_fixture_charts_and_rejects_bad_ratio() {
     let mesh = build(&fixtures::degenerate());
     let seg = segment(&mesh);
-    let v = parameterize_charts(&mesh, &seg, &ParameterizeOptions::default()).expect("valid");
+    let v = parameterize_charts(
+        &mesh,
+        &seg,
+        &ParameterizeOptions::default(),
+        &mut StageProgress::ignored(Stage::Parameterize),
+    )
+    .expect("valid");
     assert_contract(&mesh, &v.segmentation);
     // Face 2 is zero-area and glued to face 0; faces 3 and 4 repeat a vertex (isolated, all
     // degenerate: the line map). All of them get maps, none is unresolved.
@@ -475,8 +514,13 @@ fn validation_maps_degenerate_fixture_charts_and_rejects_bad_ratio() {
         ..Default::default()
     };
     assert!(matches!(
-        parameterize_charts(&mesh, &seg, &bad),
-        Err(SegmentError::InvalidOption {
+        parameterize_charts(
+            &mesh,
+            &seg,
+            &bad,
+            &mut StageProgress::ignored(Stage::Parameterize)
+        ),
+        Err(ParameterizeChartsError::InvalidOption {
             option: "max_area_ratio",
             ..
         })
@@ -487,31 +531,52 @@ fn validation_maps_degenerate_fixture_charts_and_rejects_bad_ratio() {
 fn the_monitor_sees_every_chart_and_can_cancel() {
     let mesh = build(&fixtures::uv_sphere(16, 24, 1.0));
     let seg = segment(&mesh);
-    let mut calls: Vec<(usize, usize)> = Vec::new();
-    let v =
-        parameterize_charts_with_monitor(&mesh, &seg, &ParameterizeOptions::default(), &mut |p| {
-            calls.push(p);
-            ControlFlow::Continue(())
-        })
-        .expect("valid");
+    let mut calls: Vec<(Stage, usize, usize)> = Vec::new();
+    let mut record = ProgressFn(|stage, d, k| {
+        calls.push((stage, d, k));
+        ControlFlow::Continue(())
+    });
+    let v = parameterize_charts(
+        &mesh,
+        &seg,
+        &ParameterizeOptions::default(),
+        &mut StageProgress::new(Stage::Parameterize, &mut record),
+    )
+    .expect("valid");
     assert!(calls.len() >= seg.num_charts(), "{calls:?}");
-    assert!(calls.iter().all(|&(d, k)| d <= k), "{calls:?}");
+    assert!(
+        calls
+            .iter()
+            .all(|&(s, d, k)| s == Stage::Parameterize && d <= k),
+        "{calls:?}"
+    );
     assert_eq!(
         v,
-        parameterize_charts(&mesh, &seg, &ParameterizeOptions::default()).expect("valid"),
+        parameterize_charts(
+            &mesh,
+            &seg,
+            &ParameterizeOptions::default(),
+            &mut StageProgress::ignored(Stage::Parameterize)
+        )
+        .expect("valid"),
         "the monitor does not change the result"
     );
     let mut n = 0;
-    let r =
-        parameterize_charts_with_monitor(&mesh, &seg, &ParameterizeOptions::default(), &mut |_| {
-            n += 1;
-            if n > 1 {
-                ControlFlow::Break(())
-            } else {
-                ControlFlow::Continue(())
-            }
-        });
-    assert_eq!(r, Err(SegmentError::Cancelled));
+    let mut stop_at_second = ProgressFn(|_, _, _| {
+        n += 1;
+        if n > 1 {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    });
+    let r = parameterize_charts(
+        &mesh,
+        &seg,
+        &ParameterizeOptions::default(),
+        &mut StageProgress::new(Stage::Parameterize, &mut stop_at_second),
+    );
+    assert_eq!(r, Err(ParameterizeChartsError::Cancelled));
 }
 
 /// Sander L2 stretch of one chart map, the chart scaled to UV area = model area, recomputed
@@ -566,15 +631,24 @@ fn validation_bounds_the_chart_stretch_by_default() {
         .collect();
     let seg = finish(&mesh, vec![north.clone(), south], SegmentStats::default());
     let (cm, _) = chart_mesh(&mesh, &north);
-    let map = crate::atlas::parameterize::flatten_chart(&cm, &Default::default())
-        .expect("a hemisphere is a disk");
+    let map = crate::atlas::parameterize::flatten_chart(
+        &cm,
+        &Default::default(),
+        &mut StageProgress::ignored(Stage::Parameterize),
+    )
+    .expect("a hemisphere is a disk");
     let bound = ParameterizeOptions::default()
         .max_stretch
         .expect("a default bound");
     let l2 = chart_stretch(&cm, &map.uv);
     assert!(l2 > bound, "test premise: {l2}");
-    let v =
-        parameterize_charts(&mesh, &seg, &ParameterizeOptions::default()).expect("valid options");
+    let v = parameterize_charts(
+        &mesh,
+        &seg,
+        &ParameterizeOptions::default(),
+        &mut StageProgress::ignored(Stage::Parameterize),
+    )
+    .expect("valid options");
     assert!(v.splits[2] >= 1, "{:?}", v.splits);
     assert!(v.unresolved.is_empty(), "{:?}", v.unresolved);
     assert_contract(&mesh, &v.segmentation);
@@ -596,8 +670,13 @@ fn validation_bounds_the_chart_stretch_by_default() {
         },
     ] {
         assert!(matches!(
-            parameterize_charts(&mesh, &seg, &bad),
-            Err(SegmentError::InvalidOption { .. })
+            parameterize_charts(
+                &mesh,
+                &seg,
+                &bad,
+                &mut StageProgress::ignored(Stage::Parameterize)
+            ),
+            Err(ParameterizeChartsError::InvalidOption { .. })
         ));
     }
 }
@@ -706,8 +785,12 @@ fn sock_chart_is_split_lengthwise_from_its_rim_into_two_flat_halves() {
         .max_stretch
         .expect("a default bound");
     let (cm, _) = chart_mesh(&mesh, &all);
-    let map = crate::atlas::parameterize::flatten_chart(&cm, &Default::default())
-        .expect("a disk flattens");
+    let map = crate::atlas::parameterize::flatten_chart(
+        &cm,
+        &Default::default(),
+        &mut StageProgress::ignored(Stage::Parameterize),
+    )
+    .expect("a disk flattens");
     let whole = chart_stretch(&cm, &map.uv);
     assert!(
         whole > 2.0 * bound,
@@ -735,8 +818,12 @@ fn sock_chart_is_split_lengthwise_from_its_rim_into_two_flat_halves() {
             all.len()
         );
         let (cm, _) = chart_mesh(&mesh, half);
-        let map = crate::atlas::parameterize::flatten_chart(&cm, &Default::default())
-            .expect("a disk flattens");
+        let map = crate::atlas::parameterize::flatten_chart(
+            &cm,
+            &Default::default(),
+            &mut StageProgress::ignored(Stage::Parameterize),
+        )
+        .expect("a disk flattens");
         let l2 = chart_stretch(&cm, &map.uv);
         assert!(
             l2 <= bound,
@@ -746,8 +833,13 @@ fn sock_chart_is_split_lengthwise_from_its_rim_into_two_flat_halves() {
     }
     // The whole validation: the sock leaves as at most two charts, each within the bound.
     let seg = finish(&mesh, vec![all.clone()], SegmentStats::default());
-    let v =
-        parameterize_charts(&mesh, &seg, &ParameterizeOptions::default()).expect("valid options");
+    let v = parameterize_charts(
+        &mesh,
+        &seg,
+        &ParameterizeOptions::default(),
+        &mut StageProgress::ignored(Stage::Parameterize),
+    )
+    .expect("valid options");
     assert_contract(&mesh, &v.segmentation);
     assert_maps_contract(&mesh, &v);
     assert!(
@@ -785,7 +877,13 @@ fn merge_back_respects_the_chart_size_bound() {
         merge_max_chart_fraction: None,
         ..Default::default()
     };
-    let free = parameterize_charts(&mesh, &seg, &unbounded).expect("valid options");
+    let free = parameterize_charts(
+        &mesh,
+        &seg,
+        &unbounded,
+        &mut StageProgress::ignored(Stage::Parameterize),
+    )
+    .expect("valid options");
     assert!(
         largest(&free) > Some(MERGE_CAP_FLOOR_FACES),
         "test premise: unbounded merging makes a chart above the floor, {:?}",
@@ -796,7 +894,13 @@ fn merge_back_respects_the_chart_size_bound() {
             merge_max_chart_fraction: Some(fraction),
             ..unbounded
         };
-        let v = parameterize_charts(&mesh, &seg, &bounded).expect("valid options");
+        let v = parameterize_charts(
+            &mesh,
+            &seg,
+            &bounded,
+            &mut StageProgress::ignored(Stage::Parameterize),
+        )
+        .expect("valid options");
         assert!(v.merges > 0, "{fraction}: no merge at all");
         assert!(
             largest(&v) <= Some(limit),
@@ -813,7 +917,13 @@ fn merge_back_respects_the_chart_size_bound() {
             ..Default::default()
         };
         assert!(
-            parameterize_charts(&mesh, &seg, &o).is_err(),
+            parameterize_charts(
+                &mesh,
+                &seg,
+                &o,
+                &mut StageProgress::ignored(Stage::Parameterize)
+            )
+            .is_err(),
             "{bad} accepted"
         );
     }

@@ -42,9 +42,11 @@ pub mod options;
 pub(crate) mod tests;
 
 use std::collections::VecDeque;
+use std::ops::ControlFlow;
 
 use rayon::prelude::*;
 
+use crate::atlas::progress::StageProgress;
 use crate::mesh::{FaceData, FaceId, HalfedgeId, TriangleMesh, VertexId};
 
 pub use features::{detect_features, Features};
@@ -73,7 +75,7 @@ pub enum SegmentError {
         /// What is wrong and what to use instead.
         detail: String,
     },
-    /// The caller's monitor returned `Break`.
+    /// The caller's [`StageProgress`] returned `Break`.
     #[error("segmentation was cancelled")]
     Cancelled,
 }
@@ -171,21 +173,36 @@ impl Segmentation {
 
 /// Cuts `mesh` into charts, each a topological disk (see the module doc for the contract).
 ///
-/// Errors: only [`SegmentError::InvalidOption`]; every built mesh can be segmented.
+/// `progress` is advanced through the phases (features, growing, the disk guarantee, the chart
+/// cap), each counted as the mesh's face count, with checkpoints inside each; `Break` returns
+/// [`SegmentError::Cancelled`]. Progress does not change the result.
+///
+/// Errors: [`SegmentError::InvalidOption`]; [`SegmentError::Cancelled`]. Every built mesh can
+/// be segmented.
 /// Cost: `O(F log F)` for features and growing, plus the disk checks (linear in each chart) and
 /// splits (each linear in the chart split).
 pub fn segment_charts(
     mesh: &TriangleMesh,
     options: &SegmentOptions,
+    progress: &mut StageProgress<'_>,
 ) -> Result<Segmentation, SegmentError> {
     options.check()?;
+    // Progress units: the faces, once per phase.
+    let nf = mesh.num_faces();
+    let total = PHASES * nf;
+    checkpoint(progress.advance(0, total))?;
     let mut stats = SegmentStats::default();
     let proposed = match options.method {
         SegmentMethod::Lscm2002 => {
-            let feats = detect_features(mesh, &options.lscm);
+            let feats = detect_features(mesh, &options.lscm, &mut progress.part(0, nf, total))?;
             stats.feature_edges = feats.num_feature_edges();
             stats.feature_curves = feats.curves.len();
-            let grown = grow_charts(mesh, &feats, &options.lscm);
+            let grown = grow_charts(
+                mesh,
+                &feats,
+                &options.lscm,
+                &mut progress.part(nf, nf, total),
+            )?;
             stats.seeds = grown.num_seeds;
             stats.grown_charts = grown.num_charts;
             stats.max_distance_m = grown.max_distance_m;
@@ -200,11 +217,49 @@ pub fn segment_charts(
         }
         work[c].push(f);
     }
-    let mut charts = enforce_disks(mesh, work, &mut stats);
-    if let Some(cap) = options.max_charts {
-        stats.cap_merges = merge_to_cap(mesh, &mut charts, cap);
+    // The disk guarantee, in batches of consecutive proposed charts with a checkpoint after
+    // each: a chart's disks depend on that chart alone, so the concatenation is the result of
+    // one call on all of them.
+    let mut disks = progress.part(2 * nf, nf, total);
+    let batch_faces = nf.div_ceil(DISK_BATCHES).max(1);
+    let mut charts = Vec::new();
+    let (mut batch, mut in_batch, mut faces_done) = (Vec::new(), 0usize, 0usize);
+    let mut items = work.into_iter().peekable();
+    while let Some(item) = items.next() {
+        in_batch += item.len();
+        batch.push(item);
+        if in_batch >= batch_faces || items.peek().is_none() {
+            charts.extend(enforce_disks(mesh, std::mem::take(&mut batch), &mut stats));
+            faces_done += in_batch;
+            in_batch = 0;
+            checkpoint(disks.advance(faces_done, nf))?;
+        }
     }
+    if let Some(cap) = options.max_charts {
+        stats.cap_merges = merge_to_cap(
+            mesh,
+            &mut charts,
+            cap,
+            &mut progress.part(3 * nf, nf, total),
+        )?;
+    }
+    checkpoint(progress.advance(total, total))?;
     Ok(finish(mesh, charts, stats))
+}
+
+/// The phases of [`segment_charts`] for progress: features, growing, the disk guarantee, the
+/// chart cap.
+const PHASES: usize = 4;
+
+/// Batches of the disk guarantee in [`segment_charts`] (a checkpoint after each).
+const DISK_BATCHES: usize = 8;
+
+/// A progress checkpoint's answer as the stage's result: `Break` is [`SegmentError::Cancelled`].
+pub(super) fn checkpoint(flow: ControlFlow<()>) -> Result<(), SegmentError> {
+    match flow {
+        ControlFlow::Continue(()) => Ok(()),
+        ControlFlow::Break(()) => Err(SegmentError::Cancelled),
+    }
 }
 
 /// Sorts charts by lowest face, builds the face → chart map, asserts the contract in debug.
@@ -609,10 +664,17 @@ pub(super) fn grow_two(
 
 /// Merges adjacent charts, smallest chart first, while there are more than `cap` charts and the
 /// union is still a disk. Returns the number of merges. Cost: up to `O(charts · F)` disk checks.
-fn merge_to_cap(mesh: &TriangleMesh, charts: &mut Vec<Vec<FaceId>>, cap: usize) -> usize {
+fn merge_to_cap(
+    mesh: &TriangleMesh,
+    charts: &mut Vec<Vec<FaceId>>,
+    cap: usize,
+    progress: &mut StageProgress<'_>,
+) -> Result<usize, SegmentError> {
     let mut merges = 0;
     let mut label = vec![0u32; mesh.num_faces()];
+    let excess = charts.len().saturating_sub(cap);
     'outer: while charts.len() > cap {
+        checkpoint(progress.advance(merges, excess))?;
         for (i, c) in charts.iter().enumerate() {
             for f in c {
                 label[f.index()] = i as u32;
@@ -654,5 +716,5 @@ fn merge_to_cap(mesh: &TriangleMesh, charts: &mut Vec<Vec<FaceId>>, cap: usize) 
         }
         break;
     }
-    merges
+    Ok(merges)
 }

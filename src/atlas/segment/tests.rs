@@ -1,7 +1,10 @@
 //! Tests of the segmentation stage: the disk contract on every fixture category, the paper's
 //! expected chart layouts (cube, sphere, torus), features and distances recomputed independently.
 
+use std::ops::ControlFlow;
+
 use super::*;
+use crate::atlas::progress::{ProgressFn, Stage, StageProgress};
 use crate::mesh::{fixtures, MeshInput};
 
 pub(crate) fn build(input: &MeshInput) -> TriangleMesh {
@@ -59,7 +62,12 @@ pub(crate) fn assert_contract(mesh: &TriangleMesh, seg: &Segmentation) {
 }
 
 pub(crate) fn segment(mesh: &TriangleMesh) -> Segmentation {
-    segment_charts(mesh, &SegmentOptions::default()).expect("default options are valid")
+    segment_charts(
+        mesh,
+        &SegmentOptions::default(),
+        &mut StageProgress::ignored(Stage::Segment),
+    )
+    .expect("default options are valid")
 }
 
 #[test]
@@ -84,7 +92,12 @@ fn subdivided_cube_gives_one_chart_per_side() {
 fn subdivided_cube_features_are_the_cube_edges() {
     let n = 8;
     let mesh = build(&subdivided_cube(n));
-    let feats = detect_features(&mesh, &Lscm2002Options::default());
+    let feats = detect_features(
+        &mesh,
+        &Lscm2002Options::default(),
+        &mut StageProgress::ignored(Stage::Segment),
+    )
+    .expect("never cancelled");
     let tau = feats.threshold_rad.expect("the cube has sharp edges");
     assert!((tau - std::f64::consts::FRAC_PI_2).abs() < 1e-9);
     // Every feature edge is a right-angle edge (recomputed from the face normals), and every
@@ -115,7 +128,8 @@ fn small_cube_without_long_features_still_gives_disks() {
         },
         ..SegmentOptions::default()
     };
-    let seg = segment_charts(&mesh, &opts).expect("valid options");
+    let seg = segment_charts(&mesh, &opts, &mut StageProgress::ignored(Stage::Segment))
+        .expect("valid options");
     assert_contract(&mesh, &seg);
     assert_eq!(seg.stats.feature_edges, 0);
     assert!((2..=6).contains(&seg.num_charts()), "{}", seg.num_charts());
@@ -165,7 +179,8 @@ fn featureless_sphere_is_split_by_the_diameter_rule() {
         },
         ..SegmentOptions::default()
     };
-    let seg = segment_charts(&mesh, &opts).expect("valid options");
+    let seg = segment_charts(&mesh, &opts, &mut StageProgress::ignored(Stage::Segment))
+        .expect("valid options");
     assert_contract(&mesh, &seg);
     assert_eq!(seg.stats.feature_edges, 0);
     assert_eq!(seg.stats.seeds, 2);
@@ -443,7 +458,7 @@ fn invalid_options_are_rejected_with_the_option_name() {
     ];
     let mesh = build(&fixtures::grid(1, 1));
     for (o, name) in bad {
-        match segment_charts(&mesh, &o) {
+        match segment_charts(&mesh, &o, &mut StageProgress::ignored(Stage::Segment)) {
             Err(SegmentError::InvalidOption { option, .. }) => assert_eq!(option, name),
             other => panic!("{name}: {other:?}"),
         }
@@ -461,6 +476,7 @@ fn chart_cap_merges_while_disks_remain() {
             max_charts: Some(2),
             ..Default::default()
         },
+        &mut StageProgress::ignored(Stage::Segment),
     )
     .expect("valid");
     assert_contract(&mesh, &capped);
@@ -477,7 +493,12 @@ fn distance_to_features_is_bounded_by_the_straight_line() {
     // straight-line distance from its centroid to the square's border, and (a monotone path)
     // at most twice that plus one cell diagonal.
     let mesh = build(&fixtures::grid(10, 10));
-    let feats = detect_features(&mesh, &Lscm2002Options::default());
+    let feats = detect_features(
+        &mesh,
+        &Lscm2002Options::default(),
+        &mut StageProgress::ignored(Stage::Segment),
+    )
+    .expect("never cancelled");
     assert!(feats.threshold_rad.is_none(), "flat: no positive sharpness");
     let d = distance_to_features(&mesh, &feats);
     for f in mesh.faces() {
@@ -488,4 +509,117 @@ fn distance_to_features_is_bounded_by_the_straight_line() {
         assert!(x >= to_border - 1e-12, "{f:?}: {x} < {to_border}");
         assert!(x <= 2.0 * to_border + 2f64.sqrt(), "{f:?}: {x}");
     }
+}
+
+/// Segmentation reports real progress: on a mid-size mesh (19,200 faces), many checkpoints,
+/// `done` never decreasing and never above `total`, one `total` throughout, ending at
+/// `total`; reporting does not change the charts.
+#[test]
+fn segmentation_reports_monotone_progress() {
+    let mesh = build(&subdivided_cube(40));
+    let options = SegmentOptions {
+        max_charts: Some(3),
+        ..SegmentOptions::default()
+    };
+    let mut calls: Vec<(Stage, usize, usize)> = Vec::new();
+    let mut record = ProgressFn(|stage, done, total| {
+        calls.push((stage, done, total));
+        ControlFlow::Continue(())
+    });
+    let seg = segment_charts(
+        &mesh,
+        &options,
+        &mut StageProgress::new(Stage::Segment, &mut record),
+    )
+    .expect("valid options");
+    assert!(calls.len() >= 10, "{calls:?}");
+    let total = calls[0].2;
+    assert_eq!(total, 4 * mesh.num_faces());
+    assert_eq!(calls[0].1, 0);
+    assert_eq!(calls.last(), Some(&(Stage::Segment, total, total)));
+    for w in calls.windows(2) {
+        assert!(w[0].1 <= w[1].1, "done went back: {calls:?}");
+    }
+    assert!(
+        calls
+            .iter()
+            .all(|&(s, d, t)| s == Stage::Segment && t == total && d <= t),
+        "{calls:?}"
+    );
+    // Checkpoints inside the phases, not only at their ends: several while growing (every
+    // 4096 faces), one per batch of grown charts in the disk guarantee (this mesh grows 2).
+    let in_phase = |k: usize| {
+        let (lo, hi) = (k * mesh.num_faces(), (k + 1) * mesh.num_faces());
+        let mut v: Vec<usize> = calls
+            .iter()
+            .map(|c| c.1)
+            .filter(|&d| d > lo && d < hi)
+            .collect();
+        v.dedup();
+        v.len()
+    };
+    assert!(in_phase(1) >= 2, "growing: {calls:?}");
+    assert!(in_phase(2) >= 1, "disk guarantee: {calls:?}");
+    assert_eq!(
+        seg,
+        segment_charts(&mesh, &options, &mut StageProgress::ignored(Stage::Segment))
+            .expect("valid options"),
+        "progress does not change the result"
+    );
+}
+
+/// `Break` at any checkpoint of segmentation cancels it, and `generate` reports the
+/// cancellation as the segment stage's.
+#[test]
+fn cancelling_during_segmentation_stops_it() {
+    let mesh = build(&subdivided_cube(40));
+    let options = SegmentOptions::default();
+    let mut count = 0usize;
+    let mut counter = ProgressFn(|_, _, _| {
+        count += 1;
+        ControlFlow::Continue(())
+    });
+    segment_charts(
+        &mesh,
+        &options,
+        &mut StageProgress::new(Stage::Segment, &mut counter),
+    )
+    .expect("valid options");
+    assert!(count >= 10, "{count} checkpoints");
+    for stop in [1, count / 2, count] {
+        let mut calls = 0usize;
+        let mut cancel = ProgressFn(|_, _, _| {
+            calls += 1;
+            if calls >= stop {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        });
+        let r = segment_charts(
+            &mesh,
+            &options,
+            &mut StageProgress::new(Stage::Segment, &mut cancel),
+        );
+        assert_eq!(r, Err(SegmentError::Cancelled), "stop at call {stop}");
+        assert_eq!(calls, stop, "no call after Break");
+    }
+    // Through the pipeline: a break in the middle of segmentation is Cancelled { Segment }.
+    let mut seen = 0usize;
+    let mut cancel = ProgressFn(|stage, _, _| {
+        assert_eq!(stage, Stage::Segment, "no later stage runs");
+        seen += 1;
+        if seen >= count / 2 {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    });
+    let r = crate::atlas::generate(&mesh, &crate::atlas::AtlasOptions::default(), &mut cancel);
+    assert_eq!(
+        r.err(),
+        Some(crate::atlas::AtlasError::Cancelled {
+            stage: Stage::Segment
+        })
+    );
 }
