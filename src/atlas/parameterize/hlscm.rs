@@ -22,30 +22,24 @@
 //!    approximation": intermediate levels get `relax_iterations` CG iterations; the finest level
 //!    runs CG until its stopping rule (below).
 //!
-//! Where we depart from the paper, and why (measured with `texatlas bench parameterize` on the
-//! generated height fields): relaxing with plain Jacobi-CG, as the paper does, did NOT reach the
-//! issue's accuracy target. At 50k triangles, 2 000 Jacobi-CG iterations after the cascadic
-//! start left the energy 2.6e-2 above the direct solve's (5.9e-3 at 250k). The reason is that
-//! a disk always has an exactly conformal continuous map (Riemann), so the discrete LSCM energy
-//! of a smooth chart is pure discretization error and shrinks like h²: a 1e-4 relative target
-//! on that small number asks for a very accurate solve of the low frequencies, exactly what
-//! Jacobi-CG does slowly. So each level's CG is preconditioned with the hierarchy itself: the
-//! additive multilevel (BPX-style) preconditioner `M_l⁻¹ = D_l⁻¹ + P_l·M_{l−1}⁻¹·P_lᵀ`, where
-//! `D_l` is the diagonal, `P_l` the vertex-split interpolation of the progressive mesh (the same
+//! Where we depart from the paper, and why: relaxing with plain Jacobi-CG, as the paper does,
+//! does not reach a 1e-4 relative energy of the direct solve in a useful number of iterations. A
+//! disk always has an exactly conformal continuous map (Riemann), so the discrete LSCM energy of
+//! a smooth chart is pure discretization error and shrinks like h²: a tight relative target on
+//! that small number asks for an accurate solve of the low frequencies, exactly what Jacobi-CG
+//! does slowly. So each level's CG is preconditioned with the hierarchy itself: the additive
+//! multilevel (BPX-style) preconditioner `M_l⁻¹ = D_l⁻¹ + P_l·M_{l−1}⁻¹·P_lᵀ`, where `D_l` is
+//! the diagonal, `P_l` the vertex-split interpolation of the progressive mesh (the same
 //! barycentric rule the cascade uses, as a sparse matrix truncated to 6 terms per row), and
 //! `M_0⁻¹` the coarsest level's Cholesky factor. It is symmetric positive definite, so CG stays
 //! valid, and it only changes how fast CG converges, never the minimizer.
 //! [`HlscmSmoother::Jacobi`] keeps the paper's plain relaxation for comparison.
 //!
-//! Stopping rule of the finest level (stated): relative residual `≤ final_tolerance` (1e-9), or
-//! the conformal energy decreased by at most `final_energy_tolerance·C` (1e-5) over the last
-//! `energy_window` (5) iterations, or `final_max_iterations` (500). Measured final energy vs the
-//! direct solve on the bench height fields: 3.4e-6 relative at 250k triangles (41 iterations,
-//! levels of 12.6k and 126k vertices) and 7.1e-6 at 1M triangles (49 iterations, levels of
-//! 50k and 501k vertices), i.e. 14× inside the issue's 1e-4 target. Tried and rejected
-//! (1M triangles, one run each): a third level (coarsest 5k vertices) needs 103 finest
-//! iterations instead of 49 (rel. energy 1.9e-5) and is slower; an energy tolerance of 2e-5
-//! saves 4 iterations for a 1.3e-5 relative energy, too little to trade the margin.
+//! Stopping rule of the finest level: relative residual `≤ final_tolerance` (1e-9), or the
+//! conformal energy decreased by at most `final_energy_tolerance·C` (1e-5) over the last
+//! `energy_window` (5) iterations, or `final_max_iterations` (500). Trade-off: a looser energy
+//! tolerance saves a few iterations for a visibly larger energy; a third level needs more finest
+//! iterations than it saves.
 //!
 //! The pins (lscm-2002 §2.6) are chosen on the full chart and locked in the progressive mesh,
 //! so every level solves the same pinned problem. Units as in [`super`]: UVs in model units.
@@ -53,37 +47,21 @@
 //! deterministic CG reductions, sequential faer.
 //!
 //! Memory traffic of the solve: the multilevel CG multiplies by the normal matrix stored in
-//! complex 2×2 blocks (`ComplexBlockMatrix`: one column index and `(Re, Im)` per vertex
-//! pair, lscm-2002's `conj(m_i)·m_j`, instead of four indices and four values in the scalar
-//! CSR) and by the interpolation as a vertex matrix `P` applied to both UV components
+//! complex 2×2 blocks (`ComplexBlockMatrix`: one column index and `(Re, Im)` per vertex pair,
+//! lscm-2002's `conj(m_i)·m_j`, instead of four indices and four values in the scalar CSR) and
+//! by the interpolation as a vertex matrix `P` applied to both UV components
 //! (`VertexInterpolation`, half the entries of `P ⊗ I₂`). Both add the same products in the
-//! same order as the scalar CSR, so the results are the same bits (unit test); the finest
-//! level's 49 iterations and its energy are unchanged. Measured (1M triangles, load ~7.7, one
-//! run each, interleaved): CPU 9.0 s → 7.8–8.1 s for the whole HLSCM child, solve phase
-//! 5.2–5.5 s → 4.0–4.2 s wall. Setup overlaps the decimation with the finest level's assembly,
-//! and the coarsest factorization with the interpolation matrices (`rayon::join`; each result
-//! computed exactly as alone): it did not shorten the hierarchy phase measurably on the loaded
-//! 2-core machine (no idle core), it would on an idle one.
-//!
-//! Setup off the critical path: the finest level's block matrix is converted inside the join
-//! with the decimation (it was done after it); the interpolation expands rows into one flat
-//! arena keyed by coarse level vertex (was a `Vec` per chart vertex keyed by chart vertex,
-//! then two lookups per entry), and its fine rows are built in fixed parallel chunks. Same
-//! bits (the finest energy of the bench height field 1M is unchanged, 2.6151320246e-5).
-//! Tried and not kept (1M triangles, load ~5, one run each, bench variable
-//! `TEXATLAS_BENCH_HLSCM_LEVEL_RATIO`): a coarser ratio needs fewer finest iterations but a
-//! larger coarsest factor, and was no faster: ratio 10 (50k coarsest) 49 iterations, factor
-//! 0.32 s, total 8.19 s; ratio 7 (72k) 38, 0.63 s, 8.51 s; ratio 5 (100k) 32, 0.77 s, 8.27 s;
-//! ratio 4 (125k) 29, 0.91 s, 7.98 s.
+//! same order as the scalar CSR, so the results are the same bits (unit test). Setup overlaps
+//! the decimation with the finest level's assembly, and the coarsest factorization with the
+//! interpolation matrices (`rayon::join`; each result computed exactly as alone).
 //!
 //! The coarsest level ("the coarsest mesh is parameterized", §4.1) is factored in complex
-//! Hermitian form ([`HermitianCholesky`], as the direct method of [`super::lscm`]): its
-//! 2×2 blocks are complex numbers, so the factor has half the unknowns and half the values of
-//! the real one. It serves the coarsest solve and the `M_0⁻¹` of every preconditioner
-//! application. Measured (1M triangles, load ~7, whole HLSCM child, `perf`): CPU 7.35 s →
-//! 6.56 s together with the progressive mesh's inline face lists; same 49 finest iterations,
-//! energy within rounding of the real factor's (2.6151321777e-5 → 2.6151322527e-5, direct
-//! 2.6151135e-5).
+//! Hermitian form ([`HermitianCholesky`], as the direct method of [`super::lscm`]): its 2×2
+//! blocks are complex numbers, so the factor has half the unknowns and half the values of the
+//! real one. It serves the coarsest solve and the `M_0⁻¹` of every preconditioner application.
+//!
+//! Level ratio (`level_ratio`, default 10, the paper's): a smaller ratio needs fewer finest
+//! iterations but a larger coarsest factor, and was no faster.
 use std::ops::ControlFlow;
 
 use crate::atlas::progress::StageProgress;

@@ -1,4 +1,4 @@
-//! Segmentation: cut a mesh into charts that are topological disks (issue 4).
+//! Segmentation: cut a mesh into charts that are topological disks.
 //!
 //! Purpose: the first stage of the atlas pipeline. [`segment_charts`] partitions the faces of a
 //! [`TriangleMesh`] into charts with natural shapes, their borders on high-curvature features
@@ -25,12 +25,14 @@
 //!
 //! Units: distances in model units (`_m`), angles in radians (`_rad`), counts of edges.
 //!
+//! Progress: [`segment_charts`] reports through a [`StageProgress`] in four phases of `F`
+//! units (features, growing, the disk guarantee, the chart cap), with checkpoints inside each;
+//! reporting never changes the charts.
+//!
 //! Code map: [`options`] (every option, unit, default), [`features`] (§3.1, Algorithm 1),
-//! [`grow`] (§3.2, Algorithm 2), [`sock`] (§3.2 sock-shaped charts: the lengthwise split seeds
-//! the validation uses for an over-stretched chart squeezed at its tip), [`validate`] (§3.3: flatten every chart, split the invalid
-//! ones, merge back; [`parameterize_charts_with_monitor`] reports progress and can be cancelled;
-//! every chart leaves it with a map, zero-area faces included), this file (the disk guarantee,
-//! the chart-count cap, the [`ChartMesh`] extraction for the parameterizer).
+//! [`grow`] (§3.2, Algorithm 2), this file (the disk guarantee and the chart-count cap). The
+//! next stage, `parameterize`, flattens the charts, splits the invalid ones and merges back
+//! (§3.3).
 //!
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.
