@@ -1,9 +1,9 @@
 //! `cargo bench --bench parameterize -- [--sizes 50000,250000,1000000] [--methods …] [--input FILE]…`:
 //! LSCM direct vs single-level Jacobi-CG vs HLSCM, through the public parameterize entry
-//! (`parameterize_chart` with `ParameterizeOptions::method`).
+//! (`flatten_chart` with `FlattenOptions::method`).
 //!
 //! Purpose: the measurement behind
-//! `texatlas::atlas::parameterize::ParameterizeOptions::auto_hierarchical_min_vertices`.
+//! `texatlas::atlas::parameterize::FlattenOptions::auto_hierarchical_min_vertices`.
 //!
 //! How: the parent generates (or is given) each chart, writes it once to a raw file in the
 //! temp directory, then runs every method in a child process of this executable (subcommand
@@ -12,7 +12,7 @@
 //! (the solver's `ConjugateGradient` method: Jacobi-CG from zero until its relative residual
 //! is below `--cg-tolerance` or `--cg-max-iterations`, cancelled after `--cg-timeout-s`).
 //!
-//! Timed: everything `parameterize_chart` does (chart validation, pins, assembly, solve). Not
+//! Timed: everything `flatten_chart` does (chart validation, pins, assembly, solve). Not
 //! timed: mesh generation and file IO.
 use std::io::{Read, Write};
 use std::ops::ControlFlow;
@@ -24,10 +24,11 @@ use anyhow::{bail, Context as _};
 use clap::{Parser, Subcommand};
 use serde::{Deserialize, Serialize};
 use texatlas::atlas::parameterize::{
-    parameterize_chart, parameterize_chart_with_monitor, ChartMesh, HlscmOptions,
-    ParameterizeError, ParameterizeMethod, ParameterizeOptions,
+    chart_mesh, flatten_chart, ChartMesh, FlattenOptions, HlscmOptions, ParameterizeError,
+    ParameterizeMethod,
 };
-use texatlas::atlas::segment::{chart_mesh, check_chart_is_disk};
+use texatlas::atlas::segment::check_chart_is_disk;
+use texatlas::atlas::{ProgressFn, Stage, StageProgress};
 use texatlas::mesh::TriangleMesh;
 use texatlas::numerics::CgOptions;
 
@@ -75,10 +76,10 @@ struct CgArgs {
     #[arg(long, default_value_t = 300.0)]
     cg_timeout_s: f64,
     /// Relative residual at which single-level CG stops (default: the solver's own).
-    #[arg(long, default_value_t = ParameterizeOptions::default().cg.tolerance)]
+    #[arg(long, default_value_t = FlattenOptions::default().cg.tolerance)]
     cg_tolerance: f64,
     /// Iteration cap of single-level CG (default: the solver's own).
-    #[arg(long, default_value_t = ParameterizeOptions::default().cg.max_iterations)]
+    #[arg(long, default_value_t = FlattenOptions::default().cg.max_iterations)]
     cg_max_iterations: usize,
 }
 
@@ -397,7 +398,7 @@ fn run_method(
     reference_energy: Option<f64>,
     cg: CgArgs,
 ) -> anyhow::Result<BenchRow> {
-    let options = ParameterizeOptions {
+    let options = FlattenOptions {
         method: match method {
             BenchMethod::LscmDirect => ParameterizeMethod::Direct,
             BenchMethod::Hlscm => ParameterizeMethod::Hierarchical,
@@ -408,21 +409,30 @@ fn run_method(
             tolerance: cg.cg_tolerance,
             max_iterations: cg.cg_max_iterations,
         },
-        ..ParameterizeOptions::default()
+        ..FlattenOptions::default()
     };
     let start = Instant::now();
     let mut last_iteration = 0;
     let result = if method == BenchMethod::LscmCg {
-        parameterize_chart_with_monitor(chart, &options, &mut |(done, _)| {
+        let mut timeout = ProgressFn(|_: Stage, done: usize, _: usize| {
             last_iteration = done;
             if start.elapsed().as_secs_f64() > cg.cg_timeout_s {
                 ControlFlow::Break(())
             } else {
                 ControlFlow::Continue(())
             }
-        })
+        });
+        flatten_chart(
+            chart,
+            &options,
+            &mut StageProgress::new(Stage::Parameterize, &mut timeout),
+        )
     } else {
-        parameterize_chart(chart, &options)
+        flatten_chart(
+            chart,
+            &options,
+            &mut StageProgress::ignored(Stage::Parameterize),
+        )
     };
     let seconds = start.elapsed().as_secs_f64();
     let map = match result {
@@ -647,8 +657,8 @@ mod self_tests {
     fn cg(timeout_s: f64) -> CgArgs {
         CgArgs {
             cg_timeout_s: timeout_s,
-            cg_tolerance: ParameterizeOptions::default().cg.tolerance,
-            cg_max_iterations: ParameterizeOptions::default().cg.max_iterations,
+            cg_tolerance: FlattenOptions::default().cg.tolerance,
+            cg_max_iterations: FlattenOptions::default().cg.max_iterations,
         }
     }
 

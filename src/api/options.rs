@@ -178,16 +178,16 @@ impl OptionsJson {
         }
         atlas.segment.max_charts = self.max_charts;
         if let Some(r) = self.max_stretch {
-            atlas.validate.max_stretch = r;
+            atlas.parameterize.max_stretch = r;
         }
         if let Some(r) = self.max_area_ratio {
-            atlas.validate.max_area_ratio = Some(r);
+            atlas.parameterize.max_area_ratio = Some(r);
         }
         if let Some(n) = self.merge_passes {
-            atlas.validate.merge_passes = n;
+            atlas.parameterize.merge_passes = n;
         }
         if let Some(f) = self.merge_max_chart_fraction {
-            atlas.validate.merge_max_chart_fraction = f;
+            atlas.parameterize.merge_max_chart_fraction = f;
         }
         if let Some(f) = self.feature_fraction {
             atlas.segment.lscm.feature_fraction = f;
@@ -203,7 +203,7 @@ impl OptionsJson {
             }
             atlas.segment.lscm.hard_edge_angle_rad = a.map(f64::to_radians);
         }
-        atlas.validate.parameterize.method = match self.solver.unwrap_or_default() {
+        atlas.parameterize.flatten.method = match self.solver.unwrap_or_default() {
             SolverJson::Auto => ParameterizeMethod::Auto,
             SolverJson::Direct => ParameterizeMethod::Direct,
             SolverJson::Hierarchical => ParameterizeMethod::Hierarchical,
@@ -240,10 +240,10 @@ impl OptionsJson {
             },
             rotations: Some(a.pack.rotations),
             max_charts: a.segment.max_charts,
-            max_stretch: Some(a.validate.max_stretch),
-            max_area_ratio: a.validate.max_area_ratio,
-            merge_passes: Some(a.validate.merge_passes),
-            merge_max_chart_fraction: Some(a.validate.merge_max_chart_fraction),
+            max_stretch: Some(a.parameterize.max_stretch),
+            max_area_ratio: a.parameterize.max_area_ratio,
+            merge_passes: Some(a.parameterize.merge_passes),
+            merge_max_chart_fraction: Some(a.parameterize.merge_max_chart_fraction),
             feature_fraction: Some(a.segment.lscm.feature_fraction),
             // Rounded to 1e-9° so that 60 reads back as 60, not 59.99999999999999.
             hard_edge_angle_deg: Some(
@@ -252,7 +252,7 @@ impl OptionsJson {
                     .hard_edge_angle_rad
                     .map(|r| (r.to_degrees() * 1e9).round() / 1e9),
             ),
-            solver: Some(match a.validate.parameterize.method {
+            solver: Some(match a.parameterize.flatten.method {
                 ParameterizeMethod::Direct => SolverJson::Direct,
                 ParameterizeMethod::Hierarchical => SolverJson::Hierarchical,
                 _ => SolverJson::Auto,
@@ -298,17 +298,17 @@ mod tests {
         assert_eq!(s.atlas.pack.density, TexelDensity::TexelsPerUnit(300.5));
         assert_eq!(s.atlas.pack.rotations, 4);
         assert_eq!(s.atlas.segment.max_charts, Some(12));
-        assert_eq!(s.atlas.validate.max_area_ratio, Some(3.0));
-        assert_eq!(s.atlas.validate.max_stretch, Some(1.2));
-        assert_eq!(s.atlas.validate.merge_passes, 2);
-        assert_eq!(s.atlas.validate.merge_max_chart_fraction, Some(0.25));
+        assert_eq!(s.atlas.parameterize.max_area_ratio, Some(3.0));
+        assert_eq!(s.atlas.parameterize.max_stretch, Some(1.2));
+        assert_eq!(s.atlas.parameterize.merge_passes, 2);
+        assert_eq!(s.atlas.parameterize.merge_max_chart_fraction, Some(0.25));
         assert_eq!(s.atlas.segment.lscm.feature_fraction, 0.1);
         assert_eq!(
             s.atlas.segment.lscm.hard_edge_angle_rad,
             Some(45.5f64.to_radians())
         );
         assert_eq!(
-            s.atlas.validate.parameterize.method,
+            s.atlas.parameterize.flatten.method,
             ParameterizeMethod::Hierarchical
         );
         assert_eq!(s.uv_target, UvTarget::Replace(2));
@@ -320,13 +320,13 @@ mod tests {
     fn null_max_stretch_removes_the_bound_and_absent_keeps_the_default() {
         let absent: OptionsJson = serde_json::from_str("{}").unwrap();
         assert_eq!(
-            absent.to_settings().unwrap().atlas.validate.max_stretch,
+            absent.to_settings().unwrap().atlas.parameterize.max_stretch,
             Some(1.1)
         );
         let null: OptionsJson = serde_json::from_str(r#"{"max_stretch":null}"#).unwrap();
         assert_eq!(null.max_stretch, Some(None));
         let s = null.to_settings().unwrap();
-        assert_eq!(s.atlas.validate.max_stretch, None);
+        assert_eq!(s.atlas.parameterize.max_stretch, None);
         let back = serde_json::to_string(&OptionsJson::effective(&s)).unwrap();
         assert!(back.contains(r#""max_stretch":null"#), "{back}");
     }

@@ -2,6 +2,7 @@
 //! from the stages' errors.
 
 use super::pack::PackError;
+use super::parameterize::ParameterizeChartsError;
 use super::progress::Stage;
 use super::segment::SegmentError;
 
@@ -45,6 +46,19 @@ impl From<SegmentError> for AtlasError {
             }
             // Only `generate`'s own stages can be cancelled, and it maps this with the stage.
             SegmentError::Cancelled => AtlasError::Cancelled {
+                stage: Stage::Segment,
+            },
+        }
+    }
+}
+
+impl From<ParameterizeChartsError> for AtlasError {
+    fn from(e: ParameterizeChartsError) -> Self {
+        match e {
+            ParameterizeChartsError::InvalidOption { option, detail } => {
+                AtlasError::InvalidOption { option, detail }
+            }
+            ParameterizeChartsError::Cancelled => AtlasError::Cancelled {
                 stage: Stage::Parameterize,
             },
         }

@@ -4,7 +4,7 @@
 //! segment → parameterize + validate → pack → measure. Each stage is a function of the previous
 //! stage's output and its own options:
 //! - [`segment`]: `segment_charts` cuts a [`TriangleMesh`] into charts that are each a topological
-//!   disk (Lévy et al. 2002 §3.1–3.2), and `validate_charts` flattens them with [`parameterize`]
+//!   disk (Lévy et al. 2002 §3.1–3.2), and `parameterize_charts` flattens them with [`parameterize`]
 //!   and splits those with flips, UV boundary crossings or too much area distortion (§3.3);
 //! - [`parameterize`]: flattens one chart (LSCM, Lévy et al. 2002 §2; hierarchical LSCM, Ray &
 //!   Lévy 2003);
@@ -38,13 +38,14 @@ pub use error::AtlasError;
 pub use measure::{measure_atlas, AtlasReport, MeasureInput};
 pub use options::AtlasOptions;
 pub use pack::{pack_charts, PackChart, PackError, PackOptions, TexelDensity};
-pub use progress::{NoProgress, Progress, Stage};
+pub use progress::{NoProgress, Progress, ProgressFn, Stage, StageProgress};
 
 use crate::mesh::TriangleMesh;
 use degenerate::place_degenerate;
 use pack_input::{pack_charts_of, pack_inputs, PackInputs};
 use packing_cuts::cut_for_packing;
-use segment::{segment_charts, validate_charts_with_monitor, ChartDefect, SegmentError};
+use parameterize::{parameterize_charts, ChartDefect};
+use segment::segment_charts;
 
 /// Counters of one [`generate`] run.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -121,9 +122,11 @@ pub fn generate(
 
     // 1. Segment.
     progress.stage_started(Stage::Segment);
-    check(progress.advance(Stage::Segment, 0, 1), Stage::Segment)?;
-    let seg = segment_charts(mesh, &options.segment)?;
-    check(progress.advance(Stage::Segment, 1, 1), Stage::Segment)?;
+    let seg = segment_charts(
+        mesh,
+        &options.segment,
+        &mut StageProgress::new(Stage::Segment, progress),
+    )?;
     progress.stage_finished(Stage::Segment);
 
     // 2. Parameterize and validate.
@@ -132,15 +135,12 @@ pub fn generate(
         progress.advance(Stage::Parameterize, 0, seg.num_charts()),
         Stage::Parameterize,
     )?;
-    let validated = validate_charts_with_monitor(mesh, &seg, &options.validate, &mut |(d, t)| {
-        progress.advance(Stage::Parameterize, d, t)
-    })
-    .map_err(|e| match e {
-        SegmentError::Cancelled => AtlasError::Cancelled {
-            stage: Stage::Parameterize,
-        },
-        other => other.into(),
-    })?;
+    let validated = parameterize_charts(
+        mesh,
+        &seg,
+        &options.parameterize,
+        &mut StageProgress::new(Stage::Parameterize, progress),
+    )?;
     let n = validated.segmentation.charts.len();
     check(
         progress.advance(Stage::Parameterize, n, n),

@@ -7,7 +7,8 @@
 //! Invariant: no option uses 0 to mean "unlimited" (`Option` does); [`AtlasOptions::check`]
 //! rejects meaningless values before any work starts, naming the option and what to use.
 use super::pack::PackOptions;
-use super::segment::{SegmentOptions, ValidateOptions};
+use super::parameterize::ParameterizeOptions;
+use super::segment::SegmentOptions;
 use super::AtlasError;
 
 /// Options of the whole pipeline.
@@ -18,7 +19,7 @@ pub struct AtlasOptions {
     pub segment: SegmentOptions,
     /// Chart validation (§3.3) and the parameterizer it runs: stretch bound, area-ratio test,
     /// merge passes, solver.
-    pub validate: ValidateOptions,
+    pub parameterize: ParameterizeOptions,
     /// Packing: page resolution, padding, texel density, rotations.
     pub pack: PackOptions,
 }
@@ -30,7 +31,7 @@ impl AtlasOptions {
     /// Rejects meaningless values (module doc). Called by [`super::generate`].
     pub fn check(&self) -> Result<(), AtlasError> {
         self.segment.check().map_err(AtlasError::from)?;
-        self.validate.check().map_err(AtlasError::from)?;
+        self.parameterize.check().map_err(AtlasError::from)?;
         self.pack.check().map_err(AtlasError::from)?;
         Ok(())
     }

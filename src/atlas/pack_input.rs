@@ -4,7 +4,7 @@
 
 use super::error::AtlasError;
 use super::pack::PackChart;
-use super::segment::{self, ChartDefect};
+use super::parameterize::{self, ChartDefect};
 use crate::mesh::{TriangleMesh, VertexId};
 
 /// What the packer needs of validated charts, per chart: triangles in the numbering of the
@@ -20,7 +20,7 @@ pub(super) struct PackInputs {
 /// `cut_for_packing` and the pack stage see the same charts. Errors when a chart has no map.
 pub(super) fn pack_inputs(
     mesh: &TriangleMesh,
-    v: &segment::ValidatedCharts,
+    v: &parameterize::ParameterizedCharts,
 ) -> Result<PackInputs, AtlasError> {
     let charts = &v.segmentation.charts;
     let mut local_of = vec![u32::MAX; mesh.num_vertices()];
@@ -70,7 +70,7 @@ pub(super) fn pack_inputs(
 
 /// The packer's view of the charts `packed` of `v` (see [`pack_inputs`]).
 pub(super) fn pack_charts_of<'a>(
-    v: &'a segment::ValidatedCharts,
+    v: &'a parameterize::ParameterizedCharts,
     packed: &[usize],
     triangles: &'a [Vec<[u32; 3]>],
     area_m2: &[f64],

@@ -10,6 +10,8 @@ use super::error::AtlasError;
 use super::options::AtlasOptions;
 use super::pack::{pack_charts, Packing, TexelDensity};
 use super::pack_input::{pack_charts_of, pack_inputs};
+use super::parameterize;
+use super::progress::{Stage, StageProgress};
 use super::segment;
 use crate::mesh::TriangleMesh;
 
@@ -47,16 +49,16 @@ const PACKING_CUT_MAX_TRIES: usize = 4;
 /// number of cuts kept.
 pub(super) fn cut_for_packing(
     mesh: &TriangleMesh,
-    validated: segment::ValidatedCharts,
+    validated: parameterize::ParameterizedCharts,
     options: &AtlasOptions,
-) -> Result<(segment::ValidatedCharts, usize, Option<Packing>), AtlasError> {
+) -> Result<(parameterize::ParameterizedCharts, usize, Option<Packing>), AtlasError> {
     if options.pack.density != TexelDensity::FitToPage || mesh.num_faces() > PACKING_CUT_MAX_FACES {
         return Ok((validated, 0, None));
     }
     // The estimated efficiency of `v`'s packing, its number of packed charts, and the packing
     // (None above PACKING_CUT_MAX_CHARTS charts, where no cut is tried).
     let estimate =
-        |v: &segment::ValidatedCharts| -> Result<(f64, usize, Option<Packing>), AtlasError> {
+        |v: &parameterize::ParameterizedCharts| -> Result<(f64, usize, Option<Packing>), AtlasError> {
             let inputs = pack_inputs(mesh, v)?;
             let packed: Vec<usize> = (0..inputs.degenerate.len())
                 .filter(|&i| !inputs.degenerate[i])
@@ -84,14 +86,14 @@ pub(super) fn cut_for_packing(
     let mut current = validated;
     let mut cuts = 0;
     let mut tried: Vec<Vec<crate::mesh::FaceId>> = Vec::new();
-    let validate_options = segment::ValidateOptions {
+    let validate_options = parameterize::ParameterizeOptions {
         merge_passes: 0,
-        ..options.validate
+        ..options.parameterize
     };
     // `current` with the charts `picks` each cut in two, validated again.
-    let cut = |current: &segment::ValidatedCharts,
+    let cut = |current: &parameterize::ParameterizedCharts,
                picks: &[usize]|
-     -> Result<segment::ValidatedCharts, AtlasError> {
+     -> Result<parameterize::ParameterizedCharts, AtlasError> {
         let charts = &current.segmentation.charts;
         let mut stats = current.segmentation.stats;
         let mut proposed: Vec<Vec<crate::mesh::FaceId>> = Vec::new();
@@ -105,7 +107,12 @@ pub(super) fn cut_for_packing(
             proposed.extend(segment::enforce_disks(mesh, vec![a, b], &mut stats));
         }
         let seg = segment::finish(mesh, proposed, stats);
-        Ok(segment::validate_charts(mesh, &seg, &validate_options)?)
+        Ok(parameterize::parameterize_charts(
+            mesh,
+            &seg,
+            &validate_options,
+            &mut StageProgress::ignored(Stage::Parameterize),
+        )?)
     };
     let area = |c: &[crate::mesh::FaceId]| -> f64 { c.iter().map(|&f| mesh.face_area_m2(f)).sum() };
     for _ in 0..PACKING_CUT_MAX_TRIES {

@@ -19,7 +19,7 @@
 use serde_json::Value;
 
 use super::error::{ErrorCode, GltfError};
-use super::DecodeLimits;
+use super::limits::DecodeLimits;
 
 /// A glTF componentType.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -26,49 +26,14 @@ use serde_json::Value;
 use super::accessor::{array, Reader};
 use super::error::{ErrorCode, GltfError};
 use super::glb;
-use super::triangles::extract_triangles;
+use super::limits::DecodeLimits;
+use super::triangles::{extract_triangles, TrianglePrimitive};
 use super::uri::{check_relative, resolve, Resolved, Resources};
 use super::validate::{
     check_extensions, check_nodes, check_primitive_references, check_schema, check_version,
     parse_json,
 };
 use crate::mesh::MeshInput;
-
-/// Bounds on what one decode may allocate. Defaults keep a decode under about 1 GB.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct DecodeLimits {
-    /// Largest accessor, in packed bytes (count × element size). Accessors with a buffer view
-    /// are also bounded by their real bytes; this cap matters for accessors without one (all
-    /// zeros, maybe sparse), whose `count` is backed by nothing. Default: 256 MiB.
-    pub max_accessor_bytes: u64,
-    /// Most vertices over all triangle primitives (shared POSITION accessors of one mesh count
-    /// once). `None` = no limit. Default: `Some(16_777_216)`.
-    pub max_vertices: Option<u64>,
-    /// Most triangles over all triangle primitives. `None` = no limit. Default:
-    /// `Some(16_777_216)`.
-    pub max_triangles: Option<u64>,
-}
-
-impl Default for DecodeLimits {
-    fn default() -> Self {
-        DecodeLimits {
-            max_accessor_bytes: 256 << 20,
-            max_vertices: Some(1 << 24),
-            max_triangles: Some(1 << 24),
-        }
-    }
-}
-
-/// How a triangle primitive stores its triangles.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PrimitiveMode {
-    /// Mode 4.
-    Triangles,
-    /// Mode 5.
-    TriangleStrip,
-    /// Mode 6.
-    TriangleFan,
-}
 
 /// The container the asset came in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -77,27 +42,6 @@ pub enum SourceFormat {
     Glb,
     /// JSON `.gltf`.
     Gltf,
-}
-
-/// One triangle primitive (mode 4, 5 or 6) and where its data sits in the [`MeshInput`].
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct TrianglePrimitive {
-    /// Index into the document's `meshes`.
-    pub mesh_index: usize,
-    /// Index into that mesh's `primitives`.
-    pub primitive_index: usize,
-    /// The source mode (strips and fans are written back as lists).
-    pub mode: PrimitiveMode,
-    /// The primitive's faces in `MeshInput::triangles`.
-    pub faces: Range<usize>,
-    /// First vertex of the primitive's POSITION accessor in `MeshInput::positions_m`.
-    pub vertex_start: u32,
-    /// Number of vertices (the POSITION accessor's count).
-    pub vertex_count: u32,
-    /// The `n` of every `TEXCOORD_n` the primitive already has, ascending.
-    pub texcoord_sets: Vec<u32>,
-    /// Whether the source primitive has an `indices` accessor.
-    pub indexed: bool,
 }
 
 /// An image whose bytes came from the caller's [`Resources`]; `encode` embeds it.

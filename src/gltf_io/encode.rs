@@ -67,10 +67,11 @@ use serde_json::{json, Map, Value};
 
 use super::accessor::{array, Reader};
 use super::bin_writer::Output;
-use super::decode::{Asset, PrimitiveMode, TrianglePrimitive};
+use super::decode::Asset;
 use super::error::{ErrorCode, GltfError};
 use super::glb::write_glb;
 use super::old_data::{droppable_accessors, live_views};
+use super::triangles::{PrimitiveMode, TrianglePrimitive};
 
 /// Which `TEXCOORD_k` receives the atlas UVs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -49,20 +49,22 @@ mod decode;
 mod encode;
 mod error;
 mod glb;
+mod limits;
 mod old_data;
 mod triangles;
 mod uri;
 mod validate;
 
 pub use decode::{
-    decode, required_resources, Asset, AssetSummary, DecodeLimits, MeshSummary, PrimitiveMode,
-    PrimitiveSummary, SourceFormat, TrianglePrimitive,
+    decode, required_resources, Asset, AssetSummary, MeshSummary, PrimitiveSummary, SourceFormat,
 };
 pub use encode::{
     encode, encode_pages, EncodeOptions, EncodedAsset, EncodedPart, OldVertexData, OutputFormat,
     UvTarget,
 };
 pub use error::{ErrorCode, GltfError};
+pub use limits::DecodeLimits;
+pub use triangles::{PrimitiveMode, TrianglePrimitive};
 pub use uri::{relative_path_of, Resources};
 
 #[doc(no_inline)]

@@ -8,13 +8,46 @@
 //!
 //! References: glTF 2.0 spec §3.7.2.1 (primitive modes); `KHR_mesh_quantization`.
 use std::collections::HashMap;
+use std::ops::Range;
 
 use serde_json::Value;
 
 use super::accessor::{array, field_u64, ComponentType, Reader};
-use super::decode::{DecodeLimits, PrimitiveMode, TrianglePrimitive};
 use super::error::{ErrorCode, GltfError};
+use super::limits::DecodeLimits;
 use crate::mesh::MeshInput;
+
+/// How a triangle primitive stores its triangles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PrimitiveMode {
+    /// Mode 4.
+    Triangles,
+    /// Mode 5.
+    TriangleStrip,
+    /// Mode 6.
+    TriangleFan,
+}
+
+/// One triangle primitive (mode 4, 5 or 6) and where its data sits in the [`MeshInput`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TrianglePrimitive {
+    /// Index into the document's `meshes`.
+    pub mesh_index: usize,
+    /// Index into that mesh's `primitives`.
+    pub primitive_index: usize,
+    /// The source mode (strips and fans are written back as lists).
+    pub mode: PrimitiveMode,
+    /// The primitive's faces in `MeshInput::triangles`.
+    pub faces: Range<usize>,
+    /// First vertex of the primitive's POSITION accessor in `MeshInput::positions_m`.
+    pub vertex_start: u32,
+    /// Number of vertices (the POSITION accessor's count).
+    pub vertex_count: u32,
+    /// The `n` of every `TEXCOORD_n` the primitive already has, ascending.
+    pub texcoord_sets: Vec<u32>,
+    /// Whether the source primitive has an `indices` accessor.
+    pub indexed: bool,
+}
 
 fn primitive_error(code: ErrorCode, path: String, detail: String) -> GltfError {
     GltfError::new(

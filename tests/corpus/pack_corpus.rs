@@ -11,7 +11,9 @@ use std::time::Instant;
 
 use texatlas::atlas::pack::test_charts::{check_packing, OwnedChart};
 use texatlas::atlas::pack::{pack_charts, PackOptions};
-use texatlas::atlas::segment::{segment_charts, validate_charts, SegmentOptions, ValidateOptions};
+use texatlas::atlas::parameterize::{parameterize_charts, ParameterizeOptions};
+use texatlas::atlas::segment::{segment_charts, SegmentOptions};
+use texatlas::atlas::{Stage, StageProgress};
 use texatlas::gltf_io::{decode, DecodeLimits, Resources};
 use texatlas::mesh::TriangleMesh;
 
@@ -41,8 +43,19 @@ fn pack_every_corpus_mesh() {
         let mesh = TriangleMesh::build(asset.mesh_input())
             .expect("builds")
             .mesh;
-        let seg = segment_charts(&mesh, &SegmentOptions::default()).expect("segments");
-        let v = validate_charts(&mesh, &seg, &ValidateOptions::default()).expect("validates");
+        let seg = segment_charts(
+            &mesh,
+            &SegmentOptions::default(),
+            &mut StageProgress::ignored(Stage::Segment),
+        )
+        .expect("segments");
+        let v = parameterize_charts(
+            &mesh,
+            &seg,
+            &ParameterizeOptions::default(),
+            &mut StageProgress::ignored(Stage::Parameterize),
+        )
+        .expect("validates");
         let mut charts = Vec::new();
         for (faces, map) in v.segmentation.charts.iter().zip(&v.maps) {
             let Some((map, global)) = map else { continue };

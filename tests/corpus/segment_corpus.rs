@@ -13,10 +13,11 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use texatlas::atlas::segment::{
-    chart_mesh, check_chart_is_disk, segment_charts, validate_charts, ChartDefect, SegmentOptions,
-    ValidateOptions, ValidatedCharts,
+use texatlas::atlas::parameterize::{
+    chart_mesh, parameterize_charts, ChartDefect, ParameterizeOptions, ParameterizedCharts,
 };
+use texatlas::atlas::segment::{check_chart_is_disk, segment_charts, SegmentOptions};
+use texatlas::atlas::{Stage, StageProgress};
 use texatlas::gltf_io::{decode, DecodeLimits, Resources};
 use texatlas::mesh::TriangleMesh;
 
@@ -51,7 +52,12 @@ fn segment_every_corpus_mesh() {
             .expect("builds")
             .mesh;
         let t = Instant::now();
-        let seg = segment_charts(&mesh, &SegmentOptions::default()).expect("default options");
+        let seg = segment_charts(
+            &mesh,
+            &SegmentOptions::default(),
+            &mut StageProgress::ignored(Stage::Segment),
+        )
+        .expect("default options");
         let ms = t.elapsed().as_secs_f64() * 1e3;
         let largest = seg.charts.iter().map(Vec::len).max().unwrap_or(0);
         let name = path
@@ -79,13 +85,19 @@ fn segment_every_corpus_mesh() {
         }
         // The defaults on every mesh; the paper's area test too on 2CylinderEngine, where it
         // once left two same-chart overlaps of a stretched sliver chart (faces 5369/5707, 5369/5709).
-        let mut runs = vec![("default", ValidateOptions::default())];
+        let mut runs = vec![("default", ParameterizeOptions::default())];
         if name.contains("2CylinderEngine") {
-            runs.push(("paper", ValidateOptions::paper()));
+            runs.push(("paper", ParameterizeOptions::paper()));
         }
         for (run, options) in runs {
             let t = Instant::now();
-            let v = validate_charts(&mesh, &seg, &options).expect("valid");
+            let v = parameterize_charts(
+                &mesh,
+                &seg,
+                &options,
+                &mut StageProgress::ignored(Stage::Parameterize),
+            )
+            .expect("valid");
             let ms = t.elapsed().as_secs_f64() * 1e3;
             let largest = v
                 .segmentation
@@ -178,7 +190,7 @@ fn segment_every_corpus_mesh() {
 /// Global Sander L2 stretch (Sander et al. 2001) of the validated maps, each chart scaled so that
 /// its UV area equals its 3-D area: `sqrt(Σ_T A3·(a+c)/2 / Σ_T A3)` over non-degenerate faces,
 /// with `a`, `c` the squared lengths of the 3-D derivatives along u and v.
-fn l2_stretch(mesh: &TriangleMesh, v: &ValidatedCharts) -> f64 {
+fn l2_stretch(mesh: &TriangleMesh, v: &ParameterizedCharts) -> f64 {
     let (mut num, mut den) = (0.0f64, 0.0f64);
     for (c, m) in v.segmentation.charts.iter().zip(&v.maps) {
         let Some((map, _)) = m else { continue };

@@ -7,9 +7,9 @@ use texatlas::atlas::parameterize::test_meshes::{
     self, cotan_conformal_energy as cotan_energy, spherical_cap as cap,
 };
 use texatlas::atlas::parameterize::{
-    parameterize_chart, parameterize_chart_with_monitor, ChartMesh, HlscmOptions,
-    ParameterizeError, ParameterizeMethod, ParameterizeOptions,
+    flatten_chart, ChartMesh, FlattenOptions, HlscmOptions, ParameterizeError, ParameterizeMethod,
 };
+use texatlas::atlas::{ProgressFn, Stage, StageProgress};
 
 /// An `n × n` grid over the unit square lifted to the height field `height(x, y)`.
 fn grid(n: usize, height: impl Fn(f64, f64) -> f64) -> ChartMesh {
@@ -48,28 +48,38 @@ fn meshes() -> Vec<(&'static str, ChartMesh)> {
     ]
 }
 
-fn options(method: ParameterizeMethod) -> ParameterizeOptions {
-    ParameterizeOptions {
+fn options(method: ParameterizeMethod) -> FlattenOptions {
+    FlattenOptions {
         method,
         hlscm: HlscmOptions {
             coarsest_max_vertices: 150,
             ..HlscmOptions::default()
         },
-        ..ParameterizeOptions::default()
+        ..FlattenOptions::default()
     }
 }
 
 #[test]
 fn every_method_gives_finite_unflipped_maps_with_the_reported_energy() {
     for (name, chart) in meshes() {
-        let direct = parameterize_chart(&chart, &options(ParameterizeMethod::Direct)).expect(name);
+        let direct = flatten_chart(
+            &chart,
+            &options(ParameterizeMethod::Direct),
+            &mut StageProgress::ignored(Stage::Parameterize),
+        )
+        .expect(name);
         for method in [
             ParameterizeMethod::Direct,
             ParameterizeMethod::Hierarchical,
             ParameterizeMethod::ConjugateGradient,
             ParameterizeMethod::Auto,
         ] {
-            let map = parameterize_chart(&chart, &options(method)).expect(name);
+            let map = flatten_chart(
+                &chart,
+                &options(method),
+                &mut StageProgress::ignored(Stage::Parameterize),
+            )
+            .expect(name);
             assert_eq!(map.uv.len(), chart.positions_m.len());
             assert!(
                 map.uv.iter().all(|p| p[0].is_finite() && p[1].is_finite()),
@@ -118,7 +128,12 @@ fn every_method_gives_finite_unflipped_maps_with_the_reported_energy() {
 #[test]
 fn hierarchical_really_uses_several_levels_here() {
     let (_, chart) = meshes().swap_remove(1);
-    let map = parameterize_chart(&chart, &options(ParameterizeMethod::Hierarchical)).expect("ok");
+    let map = flatten_chart(
+        &chart,
+        &options(ParameterizeMethod::Hierarchical),
+        &mut StageProgress::ignored(Stage::Parameterize),
+    )
+    .expect("ok");
     let report = map.hlscm.expect("report");
     assert!(report.levels.len() >= 2, "{report:?}");
     assert!(report.converged);
@@ -141,7 +156,14 @@ fn results_are_bit_identical_whatever_the_thread_count() {
                 .num_threads(threads)
                 .build()
                 .expect("pool")
-                .install(|| parameterize_chart(&chart, &options(method)).expect("ok"))
+                .install(|| {
+                    flatten_chart(
+                        &chart,
+                        &options(method),
+                        &mut StageProgress::ignored(Stage::Parameterize),
+                    )
+                    .expect("ok")
+                })
         };
         let (a, b) = (run(1), run(3));
         assert!(a
@@ -161,10 +183,15 @@ fn monitor_can_cancel_iterative_solves() {
         ParameterizeMethod::Hierarchical,
     ] {
         let mut calls = 0;
-        let result = parameterize_chart_with_monitor(&chart, &options(method), &mut |_| {
+        let mut stop = ProgressFn(|_, _, _| {
             calls += 1;
             ControlFlow::Break(())
         });
+        let result = flatten_chart(
+            &chart,
+            &options(method),
+            &mut StageProgress::new(Stage::Parameterize, &mut stop),
+        );
         assert_eq!(result, Err(ParameterizeError::Cancelled), "{method:?}");
         assert_eq!(calls, 1);
     }
@@ -175,7 +202,11 @@ fn bad_charts_are_typed_errors_never_panics() {
     let mut chart = grid(3, |_, _| 0.0);
     chart.triangles.push([0, 1, 99]);
     assert!(matches!(
-        parameterize_chart(&chart, &ParameterizeOptions::default()),
+        flatten_chart(
+            &chart,
+            &FlattenOptions::default(),
+            &mut StageProgress::ignored(Stage::Parameterize)
+        ),
         Err(ParameterizeError::IndexOutOfRange { .. })
     ));
     let closed = ChartMesh {
@@ -183,7 +214,11 @@ fn bad_charts_are_typed_errors_never_panics() {
         triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]],
     };
     assert!(matches!(
-        parameterize_chart(&closed, &ParameterizeOptions::default()),
+        flatten_chart(
+            &closed,
+            &FlattenOptions::default(),
+            &mut StageProgress::ignored(Stage::Parameterize)
+        ),
         Err(ParameterizeError::NotADisk { .. })
     ));
 }

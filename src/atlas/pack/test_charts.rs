@@ -7,7 +7,7 @@
 //! overlap, padding (Chebyshev distance ≤ padding between texels of different charts), the
 //! page-edge margin, UV range, density spread and packing efficiency.
 use super::{PackChart, PackOptions, Packing};
-use crate::atlas::parameterize::{parameterize_chart, ChartMesh, ParameterizeOptions};
+use crate::atlas::parameterize::{flatten_chart, ChartMesh, FlattenOptions};
 
 /// A chart that owns its data; [`OwnedChart::as_pack_chart`] borrows it for [`super::pack_charts`].
 #[derive(Debug, Clone, PartialEq)]
@@ -149,11 +149,15 @@ pub fn mixed_set(n: usize, seed: u64) -> Vec<OwnedChart> {
         .collect()
 }
 
-/// Flattens a 3-D chart with LSCM ([`parameterize_chart`]); the area is the 3-D area.
+/// Flattens a 3-D chart with LSCM ([`flatten_chart`]); the area is the 3-D area.
 /// Panics if the chart cannot be parameterized (test data only).
 pub fn parameterized(chart: &ChartMesh) -> OwnedChart {
-    let map =
-        parameterize_chart(chart, &ParameterizeOptions::default()).expect("test chart flattens");
+    let map = flatten_chart(
+        chart,
+        &FlattenOptions::default(),
+        &mut crate::atlas::StageProgress::ignored(crate::atlas::Stage::Parameterize),
+    )
+    .expect("test chart flattens");
     let area_m2 = chart
         .triangles
         .iter()

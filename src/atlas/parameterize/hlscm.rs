@@ -22,30 +22,24 @@
 //!    approximation": intermediate levels get `relax_iterations` CG iterations; the finest level
 //!    runs CG until its stopping rule (below).
 //!
-//! Where we depart from the paper, and why (measured with `texatlas bench parameterize` on the
-//! generated height fields): relaxing with plain Jacobi-CG, as the paper does, did NOT reach the
-//! issue's accuracy target. At 50k triangles, 2 000 Jacobi-CG iterations after the cascadic
-//! start left the energy 2.6e-2 above the direct solve's (5.9e-3 at 250k). The reason is that
-//! a disk always has an exactly conformal continuous map (Riemann), so the discrete LSCM energy
-//! of a smooth chart is pure discretization error and shrinks like h²: a 1e-4 relative target
-//! on that small number asks for a very accurate solve of the low frequencies, exactly what
-//! Jacobi-CG does slowly. So each level's CG is preconditioned with the hierarchy itself: the
-//! additive multilevel (BPX-style) preconditioner `M_l⁻¹ = D_l⁻¹ + P_l·M_{l−1}⁻¹·P_lᵀ`, where
-//! `D_l` is the diagonal, `P_l` the vertex-split interpolation of the progressive mesh (the same
+//! Where we depart from the paper, and why: relaxing with plain Jacobi-CG, as the paper does,
+//! does not reach a 1e-4 relative energy of the direct solve in a useful number of iterations. A
+//! disk always has an exactly conformal continuous map (Riemann), so the discrete LSCM energy of
+//! a smooth chart is pure discretization error and shrinks like h²: a tight relative target on
+//! that small number asks for an accurate solve of the low frequencies, exactly what Jacobi-CG
+//! does slowly. So each level's CG is preconditioned with the hierarchy itself: the additive
+//! multilevel (BPX-style) preconditioner `M_l⁻¹ = D_l⁻¹ + P_l·M_{l−1}⁻¹·P_lᵀ`, where `D_l` is
+//! the diagonal, `P_l` the vertex-split interpolation of the progressive mesh (the same
 //! barycentric rule the cascade uses, as a sparse matrix truncated to 6 terms per row), and
 //! `M_0⁻¹` the coarsest level's Cholesky factor. It is symmetric positive definite, so CG stays
 //! valid, and it only changes how fast CG converges, never the minimizer.
 //! [`HlscmSmoother::Jacobi`] keeps the paper's plain relaxation for comparison.
 //!
-//! Stopping rule of the finest level (stated): relative residual `≤ final_tolerance` (1e-9), or
-//! the conformal energy decreased by at most `final_energy_tolerance·C` (1e-5) over the last
-//! `energy_window` (5) iterations, or `final_max_iterations` (500). Measured final energy vs the
-//! direct solve on the bench height fields: 3.4e-6 relative at 250k triangles (41 iterations,
-//! levels of 12.6k and 126k vertices) and 7.1e-6 at 1M triangles (49 iterations, levels of
-//! 50k and 501k vertices), i.e. 14× inside the issue's 1e-4 target. Tried and rejected
-//! (1M triangles, one run each): a third level (coarsest 5k vertices) needs 103 finest
-//! iterations instead of 49 (rel. energy 1.9e-5) and is slower; an energy tolerance of 2e-5
-//! saves 4 iterations for a 1.3e-5 relative energy, too little to trade the margin.
+//! Stopping rule of the finest level: relative residual `≤ final_tolerance` (1e-9), or the
+//! conformal energy decreased by at most `final_energy_tolerance·C` (1e-5) over the last
+//! `energy_window` (5) iterations, or `final_max_iterations` (500). Trade-off: a looser energy
+//! tolerance saves a few iterations for a visibly larger energy; a third level needs more finest
+//! iterations than it saves.
 //!
 //! The pins (lscm-2002 §2.6) are chosen on the full chart and locked in the progressive mesh,
 //! so every level solves the same pinned problem. Units as in [`super`]: UVs in model units.
@@ -53,38 +47,24 @@
 //! deterministic CG reductions, sequential faer.
 //!
 //! Memory traffic of the solve: the multilevel CG multiplies by the normal matrix stored in
-//! complex 2×2 blocks (`ComplexBlockMatrix`: one column index and `(Re, Im)` per vertex
-//! pair, lscm-2002's `conj(m_i)·m_j`, instead of four indices and four values in the scalar
-//! CSR) and by the interpolation as a vertex matrix `P` applied to both UV components
+//! complex 2×2 blocks (`ComplexBlockMatrix`: one column index and `(Re, Im)` per vertex pair,
+//! lscm-2002's `conj(m_i)·m_j`, instead of four indices and four values in the scalar CSR) and
+//! by the interpolation as a vertex matrix `P` applied to both UV components
 //! (`VertexInterpolation`, half the entries of `P ⊗ I₂`). Both add the same products in the
-//! same order as the scalar CSR, so the results are the same bits (unit test); the finest
-//! level's 49 iterations and its energy are unchanged. Measured (1M triangles, load ~7.7, one
-//! run each, interleaved): CPU 9.0 s → 7.8–8.1 s for the whole HLSCM child, solve phase
-//! 5.2–5.5 s → 4.0–4.2 s wall. Setup overlaps the decimation with the finest level's assembly,
-//! and the coarsest factorization with the interpolation matrices (`rayon::join`; each result
-//! computed exactly as alone): it did not shorten the hierarchy phase measurably on the loaded
-//! 2-core machine (no idle core), it would on an idle one.
-//!
-//! Setup off the critical path: the finest level's block matrix is converted inside the join
-//! with the decimation (it was done after it); the interpolation expands rows into one flat
-//! arena keyed by coarse level vertex (was a `Vec` per chart vertex keyed by chart vertex,
-//! then two lookups per entry), and its fine rows are built in fixed parallel chunks. Same
-//! bits (the finest energy of the bench height field 1M is unchanged, 2.6151320246e-5).
-//! Tried and not kept (1M triangles, load ~5, one run each, bench variable
-//! `TEXATLAS_BENCH_HLSCM_LEVEL_RATIO`): a coarser ratio needs fewer finest iterations but a
-//! larger coarsest factor, and was no faster: ratio 10 (50k coarsest) 49 iterations, factor
-//! 0.32 s, total 8.19 s; ratio 7 (72k) 38, 0.63 s, 8.51 s; ratio 5 (100k) 32, 0.77 s, 8.27 s;
-//! ratio 4 (125k) 29, 0.91 s, 7.98 s.
+//! same order as the scalar CSR, so the results are the same bits (unit test). Setup overlaps
+//! the decimation with the finest level's assembly, and the coarsest factorization with the
+//! interpolation matrices (`rayon::join`; each result computed exactly as alone).
 //!
 //! The coarsest level ("the coarsest mesh is parameterized", §4.1) is factored in complex
-//! Hermitian form ([`HermitianCholesky`], as the direct method of [`super::lscm`]): its
-//! 2×2 blocks are complex numbers, so the factor has half the unknowns and half the values of
-//! the real one. It serves the coarsest solve and the `M_0⁻¹` of every preconditioner
-//! application. Measured (1M triangles, load ~7, whole HLSCM child, `perf`): CPU 7.35 s →
-//! 6.56 s together with the progressive mesh's inline face lists; same 49 finest iterations,
-//! energy within rounding of the real factor's (2.6151321777e-5 → 2.6151322527e-5, direct
-//! 2.6151135e-5).
+//! Hermitian form ([`HermitianCholesky`], as the direct method of [`super::lscm`]): its 2×2
+//! blocks are complex numbers, so the factor has half the unknowns and half the values of the
+//! real one. It serves the coarsest solve and the `M_0⁻¹` of every preconditioner application.
+//!
+//! Level ratio (`level_ratio`, default 10, the paper's): a smaller ratio needs fewer finest
+//! iterations but a larger coarsest factor, and was no faster.
 use std::ops::ControlFlow;
+
+use crate::atlas::progress::StageProgress;
 
 use rayon::prelude::*;
 
@@ -797,12 +777,12 @@ impl HlscmHierarchy {
             .collect()
     }
 
-    /// Cascadic solve (hlscm-2003 §3.3, §4.1). `monitor` receives `(finest-level iterations
+    /// Cascadic solve (hlscm-2003 §3.3, §4.1). `progress` receives `(finest-level iterations
     /// done, cap)`; `Break` cancels. Returns UVs per chart vertex.
     pub fn solve(
         &self,
         options: &HlscmOptions,
-        monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
+        progress: &mut StageProgress<'_>,
     ) -> Result<(Vec<[f64; 2]>, HlscmReport), ParameterizeError> {
         let n = self.pm.vertex_count;
         let mut uv = vec![[0.0f64; 2]; n];
@@ -845,7 +825,10 @@ impl HlscmHierarchy {
                     if !finest {
                         return ControlFlow::Continue(());
                     }
-                    if monitor((step.iteration, cg.max_iterations)).is_break() {
+                    if progress
+                        .advance(step.iteration, cg.max_iterations)
+                        .is_break()
+                    {
                         cancelled = true;
                         return ControlFlow::Break(());
                     }
@@ -922,151 +905,10 @@ pub fn solve_hlscm(
     topology: &ChartTopology,
     pins: &[Pin],
     options: &HlscmOptions,
-    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
+    progress: &mut StageProgress<'_>,
 ) -> Result<(Vec<[f64; 2]>, HlscmReport), ParameterizeError> {
-    build_hierarchy(chart, topology, pins, options)?.solve(options, monitor)
+    build_hierarchy(chart, topology, pins, options)?.solve(options, progress)
 }
 
 #[cfg(test)]
-mod tests {
-    use super::super::lscm::{conformal_energy, diameter_pins, flipped_faces};
-    use super::super::test_meshes::{hemisphere, noisy_height_field};
-    use super::*;
-
-    fn direct_energy(chart: &ChartMesh) -> f64 {
-        let topo = chart.validate().expect("disk");
-        let pins = diameter_pins(chart, &topo);
-        let sys = LscmSystem::assemble(chart, &topo, &pins).expect("assemble");
-        let uv = sys.uv_from_solution(&sys.solve_direct().expect("solve"));
-        conformal_energy(chart, &uv)
-    }
-
-    #[test]
-    fn hlscm_matches_direct_energy_within_1e4() {
-        for chart in [noisy_height_field(60, 0.3, 4), hemisphere(64, 30)] {
-            let topo = chart.validate().expect("disk");
-            let pins = diameter_pins(&chart, &topo);
-            let options = HlscmOptions {
-                coarsest_max_vertices: 300,
-                ..HlscmOptions::default()
-            };
-            let hierarchy = build_hierarchy(&chart, &topo, &pins, &options).expect("hierarchy");
-            let sizes = hierarchy.level_sizes();
-            assert_eq!(sizes.last(), Some(&chart.positions_m.len()));
-            // About `level_ratio` = 10 times more vertices per level (the paper's schedule).
-            for w in sizes.windows(2) {
-                let ratio = w[1] as f64 / w[0] as f64;
-                assert!((7.0..=13.0).contains(&ratio), "{sizes:?}");
-            }
-            let (uv, report) = hierarchy
-                .solve(&options, &mut |_| ControlFlow::Continue(()))
-                .expect("hlscm");
-            assert!(report.levels.len() >= 2, "{report:?}");
-            assert!(report.converged, "{report:?}");
-            let e = conformal_energy(&chart, &uv);
-            let e_direct = direct_energy(&chart);
-            assert!(
-                (e - e_direct).abs() <= 1e-4 * e_direct,
-                "hlscm {e} direct {e_direct} report {report:?}"
-            );
-            assert!(flipped_faces(&chart, &uv).is_empty());
-        }
-    }
-
-    #[test]
-    fn paper_jacobi_relaxation_also_converges_to_the_minimum() {
-        let chart = hemisphere(24, 10);
-        let topo = chart.validate().expect("disk");
-        let pins = diameter_pins(&chart, &topo);
-        let options = HlscmOptions {
-            coarsest_max_vertices: 30,
-            smoother: HlscmSmoother::Jacobi,
-            final_max_iterations: 20_000,
-            final_energy_tolerance: 0.0,
-            final_tolerance: 1e-10,
-            ..HlscmOptions::default()
-        };
-        let (uv, report) = solve_hlscm(&chart, &topo, &pins, &options, &mut |_| {
-            ControlFlow::Continue(())
-        })
-        .expect("hlscm");
-        assert!(report.levels.len() >= 2 && report.converged, "{report:?}");
-        let (e, e_direct) = (conformal_energy(&chart, &uv), direct_energy(&chart));
-        // The direct solution is the minimum: HLSCM can only be above it, and close.
-        assert!(
-            e >= e_direct * (1.0 - 1e-12) && e <= e_direct * (1.0 + 1e-6),
-            "{e} {e_direct}"
-        );
-    }
-
-    #[test]
-    fn block_mat_vecs_give_the_scalar_csr_bits() {
-        let chart = noisy_height_field(40, 0.4, 7);
-        let topo = chart.validate().expect("disk");
-        let pins = diameter_pins(&chart, &topo);
-        let sys = LscmSystem::assemble(&chart, &topo, &pins).expect("assemble");
-        let blocks = ComplexBlockMatrix::from_normal_matrix(sys.matrix()).expect("blocks");
-        let n = sys.unknowns();
-        let mut seed = 99u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
-        let x: Vec<f64> = (0..n).map(|_| next()).collect();
-        let mut y = vec![0.0; n];
-        blocks.mul_vec_into(&x, &mut y).expect("block mat-vec");
-        let expected = sys.matrix().mul_vec(&x).expect("csr mat-vec");
-        assert_eq!(
-            y.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
-            expected.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
-        );
-        // A hierarchy's interpolation against its scalar (P ⊗ I₂) CSR form and transpose.
-        let options = HlscmOptions {
-            coarsest_max_vertices: 200,
-            ..HlscmOptions::default()
-        };
-        let hierarchy = build_hierarchy(&chart, &topo, &pins, &options).expect("hierarchy");
-        let fine = hierarchy.levels.last().expect("levels");
-        let (p, pt) = fine.prolongation.as_ref().expect("prolongation");
-        let mut row_ptr = vec![0usize];
-        let (mut cols, mut vals) = (Vec::new(), Vec::new());
-        for r in 0..p.rows() {
-            for c in 0..2u32 {
-                for k in p.row_ptr[r]..p.row_ptr[r + 1] {
-                    cols.push(2 * p.col[k] + c);
-                    vals.push(p.weight[k]);
-                }
-                row_ptr.push(cols.len());
-            }
-        }
-        let scalar =
-            CsrMatrix::from_csr_parts(2 * p.rows(), 2 * p.cols, row_ptr, cols, vals).expect("csr");
-        let xc: Vec<f64> = (0..2 * p.cols).map(|_| next()).collect();
-        let xf: Vec<f64> = (0..2 * p.rows()).map(|_| next()).collect();
-        let (mut yf, mut yc) = (vec![0.0; 2 * p.rows()], vec![0.0; 2 * p.cols]);
-        p.mul_vec_into(&xc, &mut yf).expect("P");
-        pt.mul_vec_into(&xf, &mut yc).expect("Pt");
-        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&yf), bits(&scalar.mul_vec(&xc).expect("csr P")));
-        assert_eq!(
-            bits(&yc),
-            bits(&scalar.transpose().mul_vec(&xf).expect("csr Pt"))
-        );
-    }
-
-    #[test]
-    fn single_level_when_chart_is_small() {
-        let chart = noisy_height_field(8, 0.3, 4);
-        let topo = chart.validate().expect("disk");
-        let pins = diameter_pins(&chart, &topo);
-        let (uv, report) = solve_hlscm(&chart, &topo, &pins, &HlscmOptions::default(), &mut |_| {
-            ControlFlow::Continue(())
-        })
-        .expect("hlscm");
-        assert_eq!(report.levels.len(), 1);
-        let e = conformal_energy(&chart, &uv);
-        assert!((e - direct_energy(&chart)).abs() <= 1e-9 * e);
-    }
-}
+mod tests;

@@ -1,40 +1,90 @@
-//! Chart parameterization: LSCM (Lévy et al. 2002 §2) and hierarchical LSCM (Ray & Lévy 2003).
+//! The parameterize stage: flatten every chart, split the charts whose map is not usable, merge
+//! valid charts back (Lévy et al. 2002 §3.3), so that every chart leaves with a valid map.
 //!
-//! Purpose: flatten one chart (a topological disk, [`ChartMesh`]) into the plane with the least
-//! squares conformal map, choosing between a sparse direct solve (small and medium charts) and
-//! the cascadic multigrid over a progressive mesh (HLSCM, huge charts).
+//! Entry: [`parameterize_charts`] takes the segmentation (every chart a topological disk) and
+//! returns [`ParameterizedCharts`]: the final charts (still satisfying the segmentation contract:
+//! every chart a disk, every face in exactly one chart) and one map per chart.
 //!
-//! Guarantees to the next stage (issue 3 §5):
-//! - every returned map has finite UVs, one per chart vertex;
-//! - flips are never hidden: [`ChartMap::flipped_faces`] lists every face whose UV image has
-//!   non-positive signed area (empty means valid), so that chart validation can split the chart
-//!   (lscm-2002 §3.3);
-//! - deterministic: same input, same output bits, whatever the rayon thread count (fixed
-//!   reduction trees in `numerics`, sequential faer, a progressive mesh whose parallel
-//!   evaluation batches do not change its bits).
+//! Guarantees to the next stage:
+//! - every chart has a map with finite UVs, one per chart vertex, in [`chart_mesh`] order;
+//! - a valid chart's map has no flipped face, no boundary self-intersection, no vertex fold, and
+//!   its stretch (or area ratio) is within [`ParameterizeOptions`]' bounds; a chart that cannot
+//!   be made valid (a single face) is listed in `unresolved` with its [`ChartDefect`];
+//! - zero-area faces take no part in flattening and map to (near-)degenerate UV triangles;
+//! - deterministic: same input, same output bits, whatever the rayon thread count.
 //!
-//! Units: positions in model units (`_m`); UVs in model units (the second pin sits at the
-//! pins' path length from the first), NOT yet normalized to \[0,1\]: packing does that.
+//! Units: positions in model units (`_m`); UVs in model units (the second pin sits at the pins'
+//! path length from the first), NOT yet normalized to \[0,1\]: packing does that.
 //!
-//! Code map: [`chart`] (input and validation), [`lscm`] (the LSCM system, §2),
-//! [`progressive_mesh`] (half-edge collapses, hlscm-2003 §4), [`hlscm`] (cascadic multigrid,
-//! hlscm-2003 §3.3 and §4.1).
+//! Code map, in the order the stage runs:
+//! - [`stage`]: the loop (rounds of flatten-and-split in parallel, then the merge-back);
+//! - [`flatten`]: one chart's map — [`lscm`] (the LSCM system, Lévy et al. 2002 §2) or
+//!   [`hlscm`] (cascadic multigrid over a [`progressive_mesh`], Ray & Lévy 2003 §3.3, §4), on a
+//!   [`chart`] extracted by [`extract`];
+//! - `degenerate`: flattening around zero-area faces, the line map, splitting them off;
+//! - [`defects`]: the tests a map must pass (flips, boundary crossings, folds, stretch, area
+//!   ratio; §3.3), with their 2-D predicates;
+//! - `split`: the two seeds a chart with a defect is re-grown from; [`sock`]: the lengthwise
+//!   seeds of a sock-shaped chart (§3.2, Figure 5);
+//! - `warm_start`: a split part keeps its parent's map when that map is valid for it;
+//! - `merge`: the merge-back of valid charts into a neighbour; `schedule`: the largest-first
+//!   parallel map and the speculative flattening of merge tries.
+//!
+//! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
+//! Automatic Texture Atlas Generation", SIGGRAPH 2002, §2–§3.3; N. Ray, B. Lévy, "Hierarchical
+//! Least Squares Conformal Map", Pacific Graphics 2003; P. Sander, J. Snyder, S. Gortler, H.
+//! Hoppe, "Texture Mapping Progressive Meshes", SIGGRAPH 2001 (the L2 stretch).
 pub mod chart;
+pub mod defects;
+mod degenerate;
+pub mod extract;
+pub mod flatten;
 pub mod hlscm;
 pub mod lscm;
+mod merge;
+pub mod options;
 pub mod progressive_mesh;
+mod schedule;
+pub mod sock;
+mod split;
+pub mod stage;
 #[cfg(any(test, feature = "test-support"))]
 pub mod test_meshes;
+mod warm_start;
 
-use std::ops::ControlFlow;
+#[cfg(test)]
+mod tests;
 
 pub use chart::{ChartMesh, ChartTopology};
+pub use defects::{boundary_crossing, vertex_fold, ChartDefect};
+pub use extract::chart_mesh;
+pub use flatten::{flatten_chart, ChartMap, FlattenOptions, LocatedMap, ParameterizeMethod};
 pub use hlscm::{HlscmLevel, HlscmOptions, HlscmReport, HlscmSmoother};
 pub use lscm::{conformal_energy, flipped_faces, LscmSystem, Pin};
+pub use options::{ParameterizeOptions, LATE_MERGE_MAX_FACES, MERGE_CAP_FLOOR_FACES};
+pub use stage::{parameterize_charts, ParameterizedCharts};
 
-use crate::numerics::{CgOptions, CholeskyError, SparseError};
+use crate::numerics::{CholeskyError, SparseError};
 
-/// Errors of the parameterization stage. Every variant says what is wrong and how to fix it.
+/// Errors of the parameterize stage ([`parameterize_charts`]). A chart that cannot be flattened
+/// is not one: the stage splits it, or returns it with a map and lists it in `unresolved`.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ParameterizeChartsError {
+    /// An option has a meaningless value.
+    #[error("invalid parameterization option `{option}`: {detail}")]
+    InvalidOption {
+        /// The option's name, e.g. `max_stretch`.
+        option: &'static str,
+        /// What is wrong and what to use instead.
+        detail: String,
+    },
+    /// The caller's [`crate::atlas::StageProgress`] asked to stop.
+    #[error("parameterization was cancelled")]
+    Cancelled,
+}
+
+/// Errors of flattening one chart ([`flatten_chart`]). Every variant says what is wrong and how
+/// to fix it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ParameterizeError {
     /// The chart has no triangle.
@@ -127,7 +177,7 @@ pub enum ParameterizeError {
     /// The solver produced non-finite UVs.
     #[error("the solver produced non-finite UVs; the chart is too badly conditioned, split it")]
     NonFiniteResult,
-    /// The caller's monitor asked to stop.
+    /// The caller's [`crate::atlas::StageProgress`] asked to stop.
     #[error("parameterization was cancelled")]
     Cancelled,
     /// An internal invariant broke (a bug, reported rather than panicking).
@@ -136,179 +186,4 @@ pub enum ParameterizeError {
         /// What broke.
         detail: String,
     },
-}
-
-/// Which solver flattens a chart.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum ParameterizeMethod {
-    /// Direct below [`ParameterizeOptions::auto_hierarchical_min_vertices`], hierarchical above.
-    #[default]
-    Auto,
-    /// Sparse Cholesky on the normal equations in complex Hermitian form (exact up to rounding;
-    /// `lscm::solve_direct_complex`).
-    Direct,
-    /// HLSCM: cascadic multigrid over a progressive mesh (hlscm-2003).
-    Hierarchical,
-    /// Single-level Jacobi-preconditioned CG from zero (slow at scale; for reference).
-    ConjugateGradient,
-}
-
-/// Options of [`parameterize_chart`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ParameterizeOptions {
-    /// Solver choice. Default [`ParameterizeMethod::Auto`].
-    pub method: ParameterizeMethod,
-    /// With `Auto`, charts with at least this many vertices use HLSCM. Default 1_048_576
-    /// (2^20, just above the largest size measured). Measured with `texatlas bench parameterize`
-    /// on this 2-core machine, the direct solve (complex Hermitian Cholesky) was faster at every
-    /// size we ran: 126k vertices 1.6 s vs 2.6 s; 500k vertices (1M triangles) 7.5 s vs 19.4 s
-    /// and 1.0M vertices (2M triangles) 19.3 s vs 46.5 s in one run under load (2026-12-01),
-    /// and 2.3–4.3 s vs 10–12.6 s at 500k in other runs. Since the Hermitian form halved the
-    /// factor, the peak memory is close too: 665 vs 652 MiB at 500k vertices, 1407 vs 1255 MiB
-    /// at 1.0M. (Before it, the direct solve took 1432 MiB at 500k and this threshold was 500k.)
-    /// So the direct solve is used up to the largest size measured, and HLSCM, whose memory grows
-    /// linearly while the Cholesky fill grows superlinearly, beyond it.
-    pub auto_hierarchical_min_vertices: usize,
-    /// HLSCM tuning.
-    pub hlscm: HlscmOptions,
-    /// CG settings for [`ParameterizeMethod::ConjugateGradient`]. Default: relative residual
-    /// 1e-10, at most 100_000 iterations.
-    pub cg: CgOptions,
-}
-
-impl Default for ParameterizeOptions {
-    fn default() -> Self {
-        Self {
-            method: ParameterizeMethod::Auto,
-            auto_hierarchical_min_vertices: 1 << 20,
-            hlscm: HlscmOptions::default(),
-            cg: CgOptions {
-                tolerance: 1e-10,
-                max_iterations: 100_000,
-            },
-        }
-    }
-}
-
-/// The flattened chart.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ChartMap {
-    /// UV per chart vertex, model units, not yet normalized or packed.
-    pub uv: Vec<[f64; 2]>,
-    /// `C(U)` of lscm-2002 §2.4 recomputed from `uv` by [`conformal_energy`].
-    pub conformal_energy: f64,
-    /// Faces whose UV image has non-positive signed area. Empty means the map is valid.
-    pub flipped_faces: Vec<u32>,
-    /// The solver that produced the map (never `Auto`).
-    pub method_used: ParameterizeMethod,
-    /// CG iterations (0 for the direct solve; finest-level iterations for HLSCM).
-    pub iterations: usize,
-    /// The two pinned vertices (lscm-2002 §2.6).
-    pub pins: [u32; 2],
-    /// HLSCM details when it was used.
-    pub hlscm: Option<HlscmReport>,
-}
-
-impl ChartMap {
-    /// True when no face is flipped (the guarantee the next stage needs).
-    pub fn is_valid(&self) -> bool {
-        self.flipped_faces.is_empty()
-    }
-}
-
-/// Flattens one chart. See the module doc for the guarantees.
-///
-/// Errors: any defect of the chart (see [`ChartMesh::validate`]) or a solver failure.
-pub fn parameterize_chart(
-    chart: &ChartMesh,
-    options: &ParameterizeOptions,
-) -> Result<ChartMap, ParameterizeError> {
-    parameterize_chart_with_monitor(chart, options, &mut |_| ControlFlow::Continue(()))
-}
-
-/// [`parameterize_chart`] with a monitor called with `(done, total)` CG iterations on the
-/// iterative paths; returning `Break` cancels with [`ParameterizeError::Cancelled`]. This is
-/// where the pipeline's `Progress` trait plugs in.
-pub fn parameterize_chart_with_monitor(
-    chart: &ChartMesh,
-    options: &ParameterizeOptions,
-    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
-) -> Result<ChartMap, ParameterizeError> {
-    let topology = chart.validate()?;
-    flatten_validated(chart, &topology, options, monitor)
-}
-
-/// [`parameterize_chart`], also returning the chart's connectivity (computed once, by
-/// [`ChartMesh::validate`]), for callers that inspect the map further (chart validation reads
-/// the boundary loop).
-pub fn parameterize_chart_with_topology(
-    chart: &ChartMesh,
-    options: &ParameterizeOptions,
-) -> Result<(ChartMap, ChartTopology), ParameterizeError> {
-    let topology = chart.validate()?;
-    let map = flatten_validated(
-        chart,
-        &topology,
-        options,
-        &mut |_| ControlFlow::Continue(()),
-    )?;
-    Ok((map, topology))
-}
-
-/// The map of a chart that passed [`ChartMesh::validate`] (which gave `topology`).
-fn flatten_validated(
-    chart: &ChartMesh,
-    topology: &ChartTopology,
-    options: &ParameterizeOptions,
-    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
-) -> Result<ChartMap, ParameterizeError> {
-    let pins = lscm::diameter_pins(chart, topology);
-    let method = match options.method {
-        ParameterizeMethod::Auto => {
-            if chart.positions_m.len() >= options.auto_hierarchical_min_vertices {
-                ParameterizeMethod::Hierarchical
-            } else {
-                ParameterizeMethod::Direct
-            }
-        }
-        m => m,
-    };
-    let (uv, iterations, report) = match method {
-        ParameterizeMethod::Direct | ParameterizeMethod::Auto => {
-            let uv = lscm::solve_direct_complex(chart, topology, &pins)?;
-            (uv, 0, None)
-        }
-        ParameterizeMethod::ConjugateGradient => {
-            let system = LscmSystem::assemble(chart, topology, &pins)?;
-            let mut x = vec![0.0; system.unknowns()];
-            let mut cancelled = false;
-            let total = options.cg.max_iterations;
-            let outcome = system.solve_cg(&mut x, &options.cg, &mut |step| {
-                let flow = monitor((step.iteration, total));
-                cancelled = flow.is_break();
-                flow
-            })?;
-            if cancelled {
-                return Err(ParameterizeError::Cancelled);
-            }
-            (system.uv_from_solution(&x), outcome.iterations, None)
-        }
-        ParameterizeMethod::Hierarchical => {
-            let (uv, report) = hlscm::solve_hlscm(chart, topology, &pins, &options.hlscm, monitor)?;
-            (uv, report.finest_iterations, Some(report))
-        }
-    };
-    if !uv.iter().all(|p| p[0].is_finite() && p[1].is_finite()) {
-        return Err(ParameterizeError::NonFiniteResult);
-    }
-
-    Ok(ChartMap {
-        conformal_energy: conformal_energy(chart, &uv),
-        flipped_faces: flipped_faces(chart, &uv),
-        uv,
-        method_used: method,
-        iterations,
-        pins: [pins[0].vertex, pins[1].vertex],
-        hlscm: report,
-    })
 }

@@ -71,9 +71,11 @@
 //! criterion is from Hubeli & Gross 2001 (the paper's reference \[11\]).
 use rayon::prelude::*;
 
+use crate::atlas::progress::StageProgress;
 use crate::mesh::{HalfedgeId, TriangleMesh};
 
 use super::options::Lscm2002Options;
+use super::{checkpoint, SegmentError};
 
 /// The detected features of a mesh.
 #[derive(Debug, Clone, PartialEq)]
@@ -121,7 +123,16 @@ const STRING_TEST_SLACK: f64 = 1e-9;
 
 /// Detects feature curves with Algorithm 1 of the LSCM paper (see the module doc).
 /// Deterministic: edges are visited in a fixed order and ties broken by id.
-pub fn detect_features(mesh: &TriangleMesh, options: &Lscm2002Options) -> Features {
+///
+/// `progress`: the sharpness of every edge is the first half, growing the curves from the
+/// candidate edges the second, with a checkpoint every [`PROGRESS_EVERY_CANDIDATES`]
+/// candidates; `Break` returns [`SegmentError::Cancelled`].
+pub fn detect_features(
+    mesh: &TriangleMesh,
+    options: &Lscm2002Options,
+    progress: &mut StageProgress<'_>,
+) -> Result<Features, SegmentError> {
+    checkpoint(progress.advance(0, 2))?;
     let nh = mesh.num_halfedges();
     let mut sharpness_rad = vec![0.0; nh];
     // One normal per face, then the angle of `TriangleMesh::dihedral_angle_rad` (same formula,
@@ -167,7 +178,7 @@ pub fn detect_features(mesh: &TriangleMesh, options: &Lscm2002Options) -> Featur
         is_hard: vec![false; nh],
     };
     if ranked.is_empty() {
-        return out;
+        return Ok(out);
     }
     // Sharpest first, ties by edge id: the processing order of step 3. Only the edges at least
     // as sharp as τ (the k-th) are visited, so only they are sorted: the k first by a selection,
@@ -188,7 +199,7 @@ pub fn detect_features(mesh: &TriangleMesh, options: &Lscm2002Options) -> Featur
     ranked.truncate(end);
     ranked.sort_unstable_by(order);
     if tau.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-        return out;
+        return Ok(out);
     }
     out.threshold_rad = Some(tau);
     let mut grower = Grower::new(
@@ -207,8 +218,13 @@ pub fn detect_features(mesh: &TriangleMesh, options: &Lscm2002Options) -> Featur
         .collect();
     let mut scratch = Scratch::default();
     let threads = rayon::current_num_threads();
+    checkpoint(progress.advance(1, 2))?;
+    let mut curves_progress = progress.part(1, 1, 2);
     if threads <= 1 {
-        for &h in &candidates {
+        for (i, &h) in candidates.iter().enumerate() {
+            if i % PROGRESS_EVERY_CANDIDATES == 0 {
+                checkpoint(curves_progress.advance(i, candidates.len()))?;
+            }
             if !grower.usable(h) {
                 continue;
             }
@@ -225,7 +241,13 @@ pub fn detect_features(mesh: &TriangleMesh, options: &Lscm2002Options) -> Featur
         // it is expanded again against the current state). An expansion is a pure function of
         // that state, so the curves do not depend on the thread count.
         let window = SPECULATION_WINDOW_PER_THREAD * threads;
-        for chunk in candidates.chunks(window) {
+        let mut reported = 0usize;
+        for (k, chunk) in candidates.chunks(window).enumerate() {
+            let start = k * window;
+            if start >= reported + PROGRESS_EVERY_CANDIDATES || k == 0 {
+                checkpoint(curves_progress.advance(start, candidates.len()))?;
+                reported = start;
+            }
             let base = grower.accepts;
             let todo: Vec<HalfedgeId> = chunk
                 .iter()
@@ -252,12 +274,16 @@ pub fn detect_features(mesh: &TriangleMesh, options: &Lscm2002Options) -> Featur
             }
         }
     }
+    checkpoint(curves_progress.advance(candidates.len(), candidates.len()))?;
     out.is_feature = grower.is_feature;
     if let Some(angle) = options.hard_edge_angle_rad {
         add_hard_edges(mesh, &mut out, angle);
     }
-    out
+    Ok(out)
 }
+
+/// Candidate edges between two progress checkpoints of [`detect_features`].
+const PROGRESS_EVERY_CANDIDATES: usize = 1024;
 
 /// Adds the hard edges (sharpness ≥ `angle_rad`, on a connected set of at least
 /// [`MIN_HARD_CHAIN_EDGES`] of them) to `features` (module doc). Deterministic: edges in id order,

@@ -51,10 +51,12 @@ use std::collections::BinaryHeap;
 
 use rayon::prelude::*;
 
+use crate::atlas::progress::StageProgress;
 use crate::mesh::{FaceId, HalfedgeId, TriangleMesh};
 
 use super::features::Features;
 use super::options::Lscm2002Options;
+use super::{checkpoint, SegmentError};
 
 /// Result of [`grow_charts`]: a dense chart index per face, charts numbered by lowest face id.
 #[derive(Debug, Clone, PartialEq)]
@@ -237,13 +239,20 @@ impl Charts {
 /// Algorithm 2 of the LSCM paper with the seeding rules of §3.2 (see the module doc).
 /// Cost: two Dijkstra passes (distance, and the diameter sweeps per featureless closed
 /// component) and one heap pass over the half-edges, `O(F log F)`.
+///
+/// `progress`: the distances are the first quarter, the seeds the second, growing the rest,
+/// with a checkpoint every [`PROGRESS_EVERY_FACES`] faces grown; `Break` returns
+/// [`SegmentError::Cancelled`].
 pub fn grow_charts(
     mesh: &TriangleMesh,
     features: &Features,
     options: &Lscm2002Options,
-) -> GrownCharts {
+    progress: &mut StageProgress<'_>,
+) -> Result<GrownCharts, SegmentError> {
     let nf = mesh.num_faces();
+    checkpoint(progress.advance(0, 4))?;
     let mut key = distance_to_features(mesh, features);
+    checkpoint(progress.advance(1, 4))?;
     let max_distance_m = key
         .iter()
         .copied()
@@ -379,6 +388,9 @@ pub fn grow_charts(
     for &s in &seeds {
         push_face(s, &mut heap, &chart);
     }
+    checkpoint(progress.advance(2, 4))?;
+    let mut growing = progress.part(2, 2, 4);
+    let mut grown = seeds.len();
     let mut num_merges = 0usize;
     while let Some(top) = heap.pop() {
         let open = top.open();
@@ -388,6 +400,10 @@ pub fn grow_charts(
         let g = o.face();
         let cf = charts.find(chart[f.index()]);
         if chart[g.index()] == FREE {
+            grown += 1;
+            if grown % PROGRESS_EVERY_FACES == 0 {
+                checkpoint(growing.advance(grown, nf))?;
+            }
             chart[g.index()] = cf;
             let m = &mut charts.max_key[cf as usize];
             *m = m.max(key[g.index()]);
@@ -430,14 +446,17 @@ pub fn grow_charts(
         };
         face_chart[f] = c;
     }
-    GrownCharts {
+    Ok(GrownCharts {
         face_chart,
         num_charts: next as usize,
         num_seeds: seeds.len(),
         num_merges,
         max_distance_m,
-    }
+    })
 }
+
+/// Faces grown between two progress checkpoints of [`grow_charts`].
+const PROGRESS_EVERY_FACES: usize = 4096;
 
 #[cfg(test)]
 mod tests {

@@ -1,4 +1,4 @@
-//! Segmentation: cut a mesh into charts that are topological disks (issue 4).
+//! Segmentation: cut a mesh into charts that are topological disks.
 //!
 //! Purpose: the first stage of the atlas pipeline. [`segment_charts`] partitions the faces of a
 //! [`TriangleMesh`] into charts with natural shapes, their borders on high-curvature features
@@ -25,38 +25,35 @@
 //!
 //! Units: distances in model units (`_m`), angles in radians (`_rad`), counts of edges.
 //!
+//! Progress: [`segment_charts`] reports through a [`StageProgress`] in four phases of `F`
+//! units (features, growing, the disk guarantee, the chart cap), with checkpoints inside each;
+//! reporting never changes the charts.
+//!
 //! Code map: [`options`] (every option, unit, default), [`features`] (§3.1, Algorithm 1),
-//! [`grow`] (§3.2, Algorithm 2), [`sock`] (§3.2 sock-shaped charts: the lengthwise split seeds
-//! the validation uses for an over-stretched chart squeezed at its tip), [`validate`] (§3.3: flatten every chart, split the invalid
-//! ones, merge back; [`validate_charts_with_monitor`] reports progress and can be cancelled;
-//! every chart leaves it with a map, zero-area faces included), this file (the disk guarantee,
-//! the chart-count cap, the [`ChartMesh`] extraction for the parameterizer).
+//! [`grow`] (§3.2, Algorithm 2), this file (the disk guarantee and the chart-count cap). The
+//! next stage, `parameterize`, flattens the charts, splits the invalid ones and merges back
+//! (§3.3).
 //!
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.
 pub mod features;
 pub mod grow;
 pub mod options;
-pub mod sock;
-pub mod validate;
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 use std::collections::VecDeque;
+use std::ops::ControlFlow;
 
 use rayon::prelude::*;
 
-use crate::atlas::parameterize::ChartMesh;
+use crate::atlas::progress::StageProgress;
 use crate::mesh::{FaceData, FaceId, HalfedgeId, TriangleMesh, VertexId};
 
 pub use features::{detect_features, Features};
 pub use grow::{distance_to_features, grow_charts, GrownCharts};
 pub use options::{Lscm2002Options, SegmentMethod, SegmentOptions};
-pub use validate::{
-    validate_charts, validate_charts_with_monitor, ChartDefect, LocatedMap, ValidateOptions,
-    ValidatedCharts, LATE_MERGE_MAX_FACES, MERGE_CAP_FLOOR_FACES,
-};
 
 /// A chart of a [`Segmentation`], numbered by its lowest face id. Displayed as `C3`.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Debug)]
@@ -80,7 +77,7 @@ pub enum SegmentError {
         /// What is wrong and what to use instead.
         detail: String,
     },
-    /// The caller's monitor returned `Break`.
+    /// The caller's [`StageProgress`] returned `Break`.
     #[error("segmentation was cancelled")]
     Cancelled,
 }
@@ -178,21 +175,36 @@ impl Segmentation {
 
 /// Cuts `mesh` into charts, each a topological disk (see the module doc for the contract).
 ///
-/// Errors: only [`SegmentError::InvalidOption`]; every built mesh can be segmented.
+/// `progress` is advanced through the phases (features, growing, the disk guarantee, the chart
+/// cap), each counted as the mesh's face count, with checkpoints inside each; `Break` returns
+/// [`SegmentError::Cancelled`]. Progress does not change the result.
+///
+/// Errors: [`SegmentError::InvalidOption`]; [`SegmentError::Cancelled`]. Every built mesh can
+/// be segmented.
 /// Cost: `O(F log F)` for features and growing, plus the disk checks (linear in each chart) and
 /// splits (each linear in the chart split).
 pub fn segment_charts(
     mesh: &TriangleMesh,
     options: &SegmentOptions,
+    progress: &mut StageProgress<'_>,
 ) -> Result<Segmentation, SegmentError> {
     options.check()?;
+    // Progress units: the faces, once per phase.
+    let nf = mesh.num_faces();
+    let total = PHASES * nf;
+    checkpoint(progress.advance(0, total))?;
     let mut stats = SegmentStats::default();
     let proposed = match options.method {
         SegmentMethod::Lscm2002 => {
-            let feats = detect_features(mesh, &options.lscm);
+            let feats = detect_features(mesh, &options.lscm, &mut progress.part(0, nf, total))?;
             stats.feature_edges = feats.num_feature_edges();
             stats.feature_curves = feats.curves.len();
-            let grown = grow_charts(mesh, &feats, &options.lscm);
+            let grown = grow_charts(
+                mesh,
+                &feats,
+                &options.lscm,
+                &mut progress.part(nf, nf, total),
+            )?;
             stats.seeds = grown.num_seeds;
             stats.grown_charts = grown.num_charts;
             stats.max_distance_m = grown.max_distance_m;
@@ -207,11 +219,49 @@ pub fn segment_charts(
         }
         work[c].push(f);
     }
-    let mut charts = enforce_disks(mesh, work, &mut stats);
-    if let Some(cap) = options.max_charts {
-        stats.cap_merges = merge_to_cap(mesh, &mut charts, cap);
+    // The disk guarantee, in batches of consecutive proposed charts with a checkpoint after
+    // each: a chart's disks depend on that chart alone, so the concatenation is the result of
+    // one call on all of them.
+    let mut disks = progress.part(2 * nf, nf, total);
+    let batch_faces = nf.div_ceil(DISK_BATCHES).max(1);
+    let mut charts = Vec::new();
+    let (mut batch, mut in_batch, mut faces_done) = (Vec::new(), 0usize, 0usize);
+    let mut items = work.into_iter().peekable();
+    while let Some(item) = items.next() {
+        in_batch += item.len();
+        batch.push(item);
+        if in_batch >= batch_faces || items.peek().is_none() {
+            charts.extend(enforce_disks(mesh, std::mem::take(&mut batch), &mut stats));
+            faces_done += in_batch;
+            in_batch = 0;
+            checkpoint(disks.advance(faces_done, nf))?;
+        }
     }
+    if let Some(cap) = options.max_charts {
+        stats.cap_merges = merge_to_cap(
+            mesh,
+            &mut charts,
+            cap,
+            &mut progress.part(3 * nf, nf, total),
+        )?;
+    }
+    checkpoint(progress.advance(total, total))?;
     Ok(finish(mesh, charts, stats))
+}
+
+/// The phases of [`segment_charts`] for progress: features, growing, the disk guarantee, the
+/// chart cap.
+const PHASES: usize = 4;
+
+/// Batches of the disk guarantee in [`segment_charts`] (a checkpoint after each).
+const DISK_BATCHES: usize = 8;
+
+/// A progress checkpoint's answer as the stage's result: `Break` is [`SegmentError::Cancelled`].
+pub(super) fn checkpoint(flow: ControlFlow<()>) -> Result<(), SegmentError> {
+    match flow {
+        ControlFlow::Continue(()) => Ok(()),
+        ControlFlow::Break(()) => Err(SegmentError::Cancelled),
+    }
 }
 
 /// Sorts charts by lowest face, builds the face → chart map, asserts the contract in debug.
@@ -362,7 +412,7 @@ fn disk_check_connected(
 }
 
 /// The chart's faces ascending: `faces` itself when already sorted, else a sorted copy.
-fn sorted_faces(faces: &[FaceId]) -> std::borrow::Cow<'_, [FaceId]> {
+pub(super) fn sorted_faces(faces: &[FaceId]) -> std::borrow::Cow<'_, [FaceId]> {
     if faces.windows(2).all(|w| w[0] < w[1]) {
         std::borrow::Cow::Borrowed(faces)
     } else {
@@ -378,7 +428,7 @@ fn sorted_faces(faces: &[FaceId]) -> std::borrow::Cow<'_, [FaceId]> {
 /// or, for a chart with at least 1/16 of the mesh's faces, a flag per face of the mesh (zeroed
 /// lazily by the allocator, so its cost is about the chart's; no search per visit). Both give
 /// the same order.
-fn flood(
+pub(super) fn flood(
     mesh: &TriangleMesh,
     seeds: &[FaceId],
     inside: &dyn Fn(FaceId) -> bool,
@@ -616,10 +666,17 @@ pub(super) fn grow_two(
 
 /// Merges adjacent charts, smallest chart first, while there are more than `cap` charts and the
 /// union is still a disk. Returns the number of merges. Cost: up to `O(charts · F)` disk checks.
-fn merge_to_cap(mesh: &TriangleMesh, charts: &mut Vec<Vec<FaceId>>, cap: usize) -> usize {
+fn merge_to_cap(
+    mesh: &TriangleMesh,
+    charts: &mut Vec<Vec<FaceId>>,
+    cap: usize,
+    progress: &mut StageProgress<'_>,
+) -> Result<usize, SegmentError> {
     let mut merges = 0;
     let mut label = vec![0u32; mesh.num_faces()];
+    let excess = charts.len().saturating_sub(cap);
     'outer: while charts.len() > cap {
+        checkpoint(progress.advance(merges, excess))?;
         for (i, c) in charts.iter().enumerate() {
             for f in c {
                 label[f.index()] = i as u32;
@@ -661,84 +718,5 @@ fn merge_to_cap(mesh: &TriangleMesh, charts: &mut Vec<Vec<FaceId>>, cap: usize) 
         }
         break;
     }
-    merges
-}
-
-/// The chart `faces` as a chart-local indexed mesh for the parameterizer, and the map from local
-/// to global vertex ids. Local vertices are numbered in order of first use along `faces`;
-/// triangles keep `faces` order and corner order (orientation is preserved).
-pub fn chart_mesh(mesh: &TriangleMesh, faces: &[FaceId]) -> (ChartMesh, Vec<VertexId>) {
-    // A chart with at least 1/16 of the mesh's vertex count in faces: number its vertices in
-    // one pass through a per-mesh array (zeroed lazily by the allocator, so its cost is about
-    // the chart's, not the mesh's). The same numbering as the sort below.
-    if faces.len().saturating_mul(16) >= mesh.num_vertices() {
-        // `1 + local index`, 0 for not yet numbered.
-        let mut local_plus_one = vec![0u32; mesh.num_vertices()];
-        let mut global: Vec<VertexId> = Vec::new();
-        let triangles = faces
-            .iter()
-            .map(|&f| {
-                mesh.face_vertices(f).map(|v| {
-                    let slot = &mut local_plus_one[v.index()];
-                    if *slot == 0 {
-                        global.push(v);
-                        *slot = global.len() as u32;
-                    }
-                    *slot - 1
-                })
-            })
-            .collect();
-        let positions_m = global.iter().map(|&v| mesh.position(v)).collect();
-        return (
-            ChartMesh {
-                positions_m,
-                triangles,
-            },
-            global,
-        );
-    }
-    // Local numbering by first use without a tree or a per-mesh array: sort the corners by
-    // vertex (then corner), so each vertex's first corner is the first of its run; number the
-    // vertices in the order of those first corners. O(k log k).
-    let mut corners: Vec<(VertexId, u32)> = Vec::with_capacity(3 * faces.len());
-    for (k, &f) in faces.iter().enumerate() {
-        for (c, v) in mesh.face_vertices(f).into_iter().enumerate() {
-            corners.push((v, (3 * k + c) as u32));
-        }
-    }
-    corners.sort_unstable();
-    // (first corner, vertex) per distinct vertex, then by first corner.
-    let mut firsts: Vec<(u32, VertexId)> = Vec::new();
-    for (i, &(v, c)) in corners.iter().enumerate() {
-        if i == 0 || corners[i - 1].0 != v {
-            firsts.push((c, v));
-        }
-    }
-    firsts.sort_unstable();
-    let global: Vec<VertexId> = firsts.iter().map(|&(_, v)| v).collect();
-    let mut local_of_first: Vec<(VertexId, u32)> = firsts
-        .iter()
-        .enumerate()
-        .map(|(l, &(_, v))| (v, l as u32))
-        .collect();
-    local_of_first.sort_unstable();
-    let mut corner_local = vec![0u32; 3 * faces.len()];
-    let mut run = 0usize;
-    for (i, &(v, c)) in corners.iter().enumerate() {
-        if i > 0 && corners[i - 1].0 != v {
-            run += 1;
-        }
-        corner_local[c as usize] = local_of_first[run].1;
-    }
-    let triangles = (0..faces.len())
-        .map(|k| [0, 1, 2].map(|c| corner_local[3 * k + c]))
-        .collect();
-    let positions_m = global.iter().map(|&v| mesh.position(v)).collect();
-    (
-        ChartMesh {
-            positions_m,
-            triangles,
-        },
-        global,
-    )
+    Ok(merges)
 }

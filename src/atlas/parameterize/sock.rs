@@ -35,7 +35,7 @@ use std::collections::VecDeque;
 
 use crate::mesh::{FaceId, HalfedgeId, TriangleMesh};
 
-use super::sorted_faces;
+use crate::atlas::segment::sorted_faces;
 
 /// Breadth-first depth of every face of the chart (`faces` ascending, or any order) from its
 /// boundary faces (depth 0: a face with an edge that is not glued to a chart face), in the order

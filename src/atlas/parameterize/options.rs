@@ -1,0 +1,124 @@
+//! Options of the parameterize stage ([`super::parameterize_charts`]): the validity bounds of
+//! Lévy et al. 2002 §3.3 (stretch or area ratio), the merge-back's passes and size bound, and how
+//! each chart is flattened ([`super::FlattenOptions`]).
+//!
+//! Invariant: [`ParameterizeOptions::check`] rejects meaningless values before any work; no
+//! option uses 0 to mean "unlimited" (`Option` does). Units: ratios are plain ratios, fractions
+//! are of the mesh's face count, counts are counts.
+use super::FlattenOptions;
+use super::ParameterizeChartsError;
+
+/// Options of [`parameterize_charts`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParameterizeOptions {
+    /// The paper's area test (§3.3): largest allowed ratio between the largest and the smallest
+    /// per-face area ratio (model area / UV area) within a chart, or `None` for no area test.
+    /// Plain ratio `>= 1`. Default `None`: the per-chart stretch bound
+    /// [`Self::max_stretch`] replaces it (module doc, "deviation"). `Some(2.0)` with
+    /// [`Self::area_ratio_trim`] 0 is the paper's test.
+    pub max_area_ratio: Option<f64>,
+    /// Fraction of a chart's model area ignored at each end of the distribution of per-face area
+    /// ratios by the area test: the ratio is measured between the area-weighted `trim` and
+    /// `1 − trim` quantiles instead of the minimum and maximum. Ratio in `[0, 0.5)`. Default 0
+    /// (the paper's max / min).
+    pub area_ratio_trim: f64,
+    /// Largest allowed Sander L2 stretch of a chart (Sander et al. 2001, the chart scaled so
+    /// that its UV area equals its model area, as the packer does), or `None` for no bound.
+    /// Ratio `>= 1` (1 is isometric). A chart above it is split from its faces of smallest and
+    /// largest model area per UV area, like the paper's area test. Since the atlas' global L2
+    /// stretch is the area-weighted quadratic mean of the charts' (as the report measures it), it
+    /// is then at most this bound too. Default `Some(1.1)`.
+    pub max_stretch: Option<f64>,
+    /// Passes of the merge-back of valid charts into a neighbour (see `merge_back`): the first
+    /// pass tries only the small charts, later ones every chart; merging stops early after a
+    /// later pass without a merge. A count; 0 disables merging. Default 3. Trade-off: each later
+    /// pass removes charts (and raises the global stretch a little, within the bound) for the
+    /// cost of flattening unions of large charts; on meshes of more than
+    /// [`LATE_MERGE_MAX_FACES`] faces only the first pass runs, since that cost grows with the
+    /// mesh.
+    pub merge_passes: usize,
+    /// Largest chart the merge-back may make, as a fraction of the mesh's faces, or `None` for
+    /// no bound: a union with more faces than this fraction (and more than
+    /// [`MERGE_CAP_FLOOR_FACES`]) is not tried. Fraction in `(0, 1]`. It does not split
+    /// charts: segmentation and validation may leave larger ones. Default `Some(0.10)`.
+    /// Trade-off: the union solves of large charts are most of the stage's time and most of
+    /// them fail the stretch bound; the bound leaves a few more charts for much less work.
+    pub merge_max_chart_fraction: Option<f64>,
+    /// How each chart is flattened. Default [`FlattenOptions::default`].
+    pub flatten: FlattenOptions,
+}
+
+/// Meshes with more faces than this get only the first merge pass
+/// ([`ParameterizeOptions::merge_passes`]).
+pub const LATE_MERGE_MAX_FACES: usize = 500_000;
+
+/// Unions of at most this many faces are always tried by the merge-back, whatever
+/// [`ParameterizeOptions::merge_max_chart_fraction`] says: their solve is cheap, and on small
+/// meshes the fraction alone would forbid the merges that undo over-segmentation.
+pub const MERGE_CAP_FLOOR_FACES: usize = 4096;
+
+impl Default for ParameterizeOptions {
+    fn default() -> Self {
+        Self {
+            max_area_ratio: None,
+            area_ratio_trim: 0.0,
+            max_stretch: Some(1.1),
+            merge_passes: 3,
+            merge_max_chart_fraction: Some(0.10),
+            flatten: FlattenOptions::default(),
+        }
+    }
+}
+
+impl ParameterizeOptions {
+    /// The paper's validation (§3.3): the max / min area-ratio test with threshold 2 and no
+    /// stretch bound.
+    pub fn paper() -> Self {
+        Self {
+            max_area_ratio: Some(2.0),
+            area_ratio_trim: 0.0,
+            max_stretch: None,
+            ..Self::default()
+        }
+    }
+
+    /// Rejects meaningless values, naming the option and how to fix it.
+    pub fn check(&self) -> Result<(), ParameterizeChartsError> {
+        if let Some(r) = self.max_area_ratio {
+            if !(r >= 1.0 && r.is_finite()) {
+                return Err(ParameterizeChartsError::InvalidOption {
+                    option: "max_area_ratio",
+                    detail: format!("{r} is not a finite ratio >= 1; use e.g. 2.0, or None"),
+                });
+            }
+        }
+        if !(self.area_ratio_trim >= 0.0 && self.area_ratio_trim < 0.5) {
+            return Err(ParameterizeChartsError::InvalidOption {
+                option: "area_ratio_trim",
+                detail: format!(
+                    "{} is not a fraction in [0, 0.5); use 0 for max / min",
+                    self.area_ratio_trim
+                ),
+            });
+        }
+        if let Some(r) = self.max_stretch {
+            if !(r >= 1.0 && r.is_finite()) {
+                return Err(ParameterizeChartsError::InvalidOption {
+                    option: "max_stretch",
+                    detail: format!("{r} is not a finite ratio >= 1; use e.g. 1.1, or None"),
+                });
+            }
+        }
+        if let Some(f) = self.merge_max_chart_fraction {
+            if !(f > 0.0 && f <= 1.0) {
+                return Err(ParameterizeChartsError::InvalidOption {
+                    option: "merge_max_chart_fraction",
+                    detail: format!(
+                        "{f} is not a fraction in (0, 1]; use e.g. 0.1, or None for no bound"
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+}

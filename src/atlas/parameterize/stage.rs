@@ -1,0 +1,285 @@
+//! The loop of the parameterize stage ([`parameterize_charts`]): Lévy et al. 2002 §3.3,
+//! "validate charts".
+//!
+//! Purpose: flatten every chart of the segmentation and split each chart whose map is not
+//! usable, until every chart is valid; then merge valid charts back into a neighbour while the
+//! union stays valid. A map is not usable when it has (tests in [`super::defects`]):
+//! - a **flipped triangle** (LSCM cannot flip in exact arithmetic, §2.6 and A.5, but HLSCM and
+//!   rounding can): split from the ends of a diameter of the chart's face graph;
+//! - a **boundary self-intersection** in UV (the overlaps of §3.3, Figure 6) or a **fold at a
+//!   vertex** (UV angles around it past a full turn): re-grown in two from the faces of the two
+//!   crossing segments, or of the vertex's fan (the paper cuts along the border of the
+//!   overlapped zone; re-growing is the simpler alternative);
+//! - too much **area distortion**: the chart's Sander L2 stretch above
+//!   [`ParameterizeOptions::max_stretch`] (the default), or the paper's test, max / min of the
+//!   per-face model area per UV area above [`ParameterizeOptions::max_area_ratio`]
+//!   ([`ParameterizeOptions::paper`]); split from the faces of smallest and largest ratio, as in
+//!   the paper, or lengthwise when the chart is sock-shaped ([`super::sock`]).
+//!
+//!   Deviation from the paper: the default bounds the stretch instead of max / min, which single
+//!   outlier faces decide (it over-splits scanned meshes); the stretch bound is area-weighted,
+//!   measures what the report measures, and bounds the atlas' global L2 stretch by construction.
+//!
+//! Every part is passed through the disk guarantee again, so the result still satisfies the
+//! segmentation contract. A part first tries its parent's map restricted to it
+//! ([`super::warm_start`]); zero-area faces are handled by [`super::degenerate`]. A chart the
+//! parameterizer rejects for another reason is split by diameter; a single face that still
+//! fails keeps the line map and is listed in `unresolved` as
+//! [`ChartDefect::Unparameterizable`]. So no chart is ever left without a map.
+//!
+//! Invariants: terminates — each split makes one more chart, a single triangle never splits,
+//! and the number of splits is bounded by the face count. Deterministic: the charts of one round
+//! are flattened in parallel (pure functions of the chart and its parent's map) and consumed in
+//! chart order; the merge-back is sequential, and its speculative parallel flattening
+//! ([`super::schedule`]) uses a result only under the exact chart versions it was queued for.
+//!
+//! Units: area ratios are plain ratios (model area per UV area, divided by its minimum over the
+//! chart); UVs in model units, as the parameterizer returns them.
+//!
+//! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
+//! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.3 (area-ratio threshold 2).
+use std::sync::Arc;
+
+use super::defects::ChartDefect;
+use super::degenerate::{flatten_around_degenerate, line_map, split_off_degenerate, Attempt};
+use super::merge::merge_back;
+use super::schedule::in_parallel_largest_first;
+use super::split::split_for;
+use super::warm_start::restrict_map;
+use super::{LocatedMap, ParameterizeChartsError, ParameterizeOptions};
+use crate::atlas::progress::StageProgress;
+use crate::atlas::segment::{disk_check, enforce_disks, finish, SegmentStats, Segmentation};
+use crate::mesh::{FaceId, TriangleMesh};
+
+/// The validated charts and their maps.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParameterizedCharts {
+    /// The final charts (each a disk; see [`Segmentation`]).
+    pub segmentation: Segmentation,
+    /// The map of each chart (same order as `segmentation.charts`). **Contract:** every entry is
+    /// `Some`, and its vertex list is exactly `chart_mesh(mesh, &segmentation.charts[i]).1`, so
+    /// it covers every vertex of the chart's faces and `uv[l]` is the UV of the chart-local
+    /// vertex `l` of [`chart_mesh`]'s triangles. (`Option` is kept for the stable type; `None`
+    /// is never returned.) Zero-area faces map to (near-)degenerate UV triangles (module doc).
+    pub maps: Vec<Option<LocatedMap>>,
+    /// Charts returned although not valid: chart index and why. Such a chart still has a map
+    /// (a single face that failed to flatten gets the fallback line map of the module doc).
+    pub unresolved: Vec<(usize, ChartDefect)>,
+    /// Splits made, by cause: flips, overlaps, area distortion (the area-ratio test or the
+    /// stretch bound).
+    pub splits: [usize; 3],
+    /// Splits made because a chart without its zero-area faces was not a disk, or because the
+    /// parameterizer failed on it (split by diameter).
+    pub degenerate_splits: usize,
+    /// Zero-area (or repeated-vertex) faces in the mesh, left out of every flattening and
+    /// mapped from their neighbours' UVs.
+    pub degenerate_faces: usize,
+    /// Small charts merged back into a neighbour after splitting.
+    pub merges: usize,
+}
+
+/// The parameterize stage: flattens every chart of `seg`, splits invalid ones until all are
+/// valid, and merges valid charts back (module doc).
+///
+/// `progress` is advanced between charts with `(done, known)`: the charts finished so far and
+/// the charts known so far (finished, queued, and parts of splits; it grows as charts are split,
+/// and falls as the merge-back removes charts). `Break` stops the work and returns
+/// [`ParameterizeChartsError::Cancelled`]. Progress does not change the result.
+///
+/// Errors: [`ParameterizeChartsError::InvalidOption`] (see [`ParameterizeOptions::check`]);
+/// [`ParameterizeChartsError::Cancelled`].
+/// Cost: one parameterization per chart, plus one per part after each split, plus one per
+/// merge-back try. Charts of one round are flattened in parallel (rayon); results are consumed
+/// in chart order, so the output does not depend on the thread count.
+pub fn parameterize_charts(
+    mesh: &TriangleMesh,
+    seg: &Segmentation,
+    options: &ParameterizeOptions,
+    progress: &mut StageProgress<'_>,
+) -> Result<ParameterizedCharts, ParameterizeChartsError> {
+    options.check()?;
+    let mut stats: SegmentStats = seg.stats;
+    // Each pending chart carries the map of the chart it was split from, if any: its
+    // restriction is tried before flattening (`restrict_map`, module doc "warm start").
+    let mut pending: Vec<(Vec<FaceId>, Option<Arc<LocatedMap>>)> =
+        seg.charts.iter().map(|c| (c.clone(), None)).collect();
+    let mut done: Vec<(Vec<FaceId>, LocatedMap)> = Vec::new();
+    let mut unresolved_faces: Vec<(FaceId, ChartDefect)> = Vec::new();
+    let mut splits = [0usize; 3];
+    let mut degenerate_splits = 0usize;
+    let max_splits = mesh.num_faces();
+    // Rounds: flatten every pending chart and split the invalid ones (in parallel: both are
+    // pure functions of the chart and its parent's map, `process_chart`), then, in chart order,
+    // keep the valid ones and queue the parts of the others for the next round.
+    while !pending.is_empty() {
+        for (faces, _) in &mut pending {
+            faces.sort_unstable();
+        }
+        let steps = in_parallel_largest_first(&pending, |(faces, parent)| {
+            process_chart(mesh, faces, parent.as_deref(), options)
+        });
+        let round = pending.len();
+        let mut next: Vec<(Vec<FaceId>, Option<Arc<LocatedMap>>)> = Vec::new();
+        for (k, ((faces, _), step)) in pending.into_iter().zip(steps).enumerate() {
+            if progress
+                .advance(done.len(), done.len() + round - k + next.len())
+                .is_break()
+            {
+                return Err(ParameterizeChartsError::Cancelled);
+            }
+            // Never reached (each split makes one more chart and there are at most as many
+            // charts as faces), but kept so that termination does not rest on that argument.
+            let budget_left = splits.iter().sum::<usize>() + degenerate_splits < max_splits;
+            match step {
+                Step::Keep { map, defect } => {
+                    if let Some(defect) = defect {
+                        unresolved_faces.push((faces[0], defect));
+                    }
+                    done.push((faces, map));
+                }
+                Step::SplitDegenerate { parts, disk_splits } if budget_left => {
+                    degenerate_splits += 1;
+                    stats.disk_splits += disk_splits;
+                    next.extend(parts.into_iter().map(|p| (p, None)));
+                }
+                Step::SplitDegenerate { .. } => {
+                    let map = line_map(mesh, &faces);
+                    done.push((faces, map));
+                }
+                Step::Split {
+                    parts,
+                    cause,
+                    disk_splits,
+                    map,
+                    ..
+                } if budget_left => {
+                    match cause {
+                        Some(cause) => splits[cause] += 1,
+                        None => degenerate_splits += 1,
+                    }
+                    stats.disk_splits += disk_splits;
+                    let parent = map.map(Arc::new);
+                    next.extend(parts.into_iter().map(|p| (p, parent.clone())));
+                }
+                Step::Split { map, defect, .. } => {
+                    // The split budget is spent: keep it, with a map.
+                    unresolved_faces.push((faces[0], defect));
+                    let map = map.unwrap_or_else(|| line_map(mesh, &faces));
+                    done.push((faces, map));
+                }
+            }
+        }
+        pending = next;
+    }
+    let unresolved: std::collections::BTreeSet<FaceId> =
+        unresolved_faces.iter().map(|(f, _)| *f).collect();
+    let merges = merge_back(mesh, &mut done, &unresolved, options, progress)?;
+    // Order by lowest face like `segment_charts`, keeping maps aligned. Every chart's faces are
+    // already ascending, and its map is in `chart_mesh` order of those faces.
+    done.sort_by_key(|(faces, _)| faces[0]);
+    let charts: Vec<Vec<FaceId>> = done.iter().map(|(f, _)| f.clone()).collect();
+    let segmentation = finish(mesh, charts, stats);
+    let unresolved = unresolved_faces
+        .into_iter()
+        .map(|(f, d)| (segmentation.face_chart[f].index(), d))
+        .collect();
+    let degenerate_faces = mesh
+        .faces()
+        .filter(|&f| mesh.face_degeneracy(f).is_some())
+        .count();
+    Ok(ParameterizedCharts {
+        segmentation,
+        maps: done.into_iter().map(|(_, m)| Some(m)).collect(),
+        unresolved,
+        splits,
+        degenerate_splits,
+        degenerate_faces,
+        merges,
+    })
+}
+
+/// What one round does with one chart (`process_chart`).
+pub(super) enum Step {
+    /// Keep the chart with this map; with a defect when it is invalid but cannot be split
+    /// (one face), listed in `unresolved`.
+    Keep {
+        map: LocatedMap,
+        defect: Option<ChartDefect>,
+    },
+    /// The chart without its zero-area faces is not a disk: these parts (`split_off_degenerate`),
+    /// flattened from scratch. `disk_splits` is what the disk guarantee added to the stats.
+    SplitDegenerate {
+        parts: Vec<Vec<FaceId>>,
+        disk_splits: usize,
+    },
+    /// The chart's map has `defect`: these parts (disks, faces ascending), each first given the
+    /// restriction of `map` (module doc, "warm start"). `cause` is the `splits` index (`None`:
+    /// a parameterizer failure, split by diameter).
+    Split {
+        parts: Vec<Vec<FaceId>>,
+        cause: Option<usize>,
+        disk_splits: usize,
+        map: Option<LocatedMap>,
+        defect: ChartDefect,
+    },
+}
+
+/// Flattens the chart `faces` (ascending; first the restriction of `parent`'s map when there is
+/// one) and, when the map has a defect, splits it. Pure (no shared state: chart membership is
+/// by binary search in `faces`), so the charts of a round are processed in parallel.
+pub(super) fn process_chart(
+    mesh: &TriangleMesh,
+    faces: &[FaceId],
+    parent: Option<&LocatedMap>,
+    options: &ParameterizeOptions,
+) -> Step {
+    let outcome = parent
+        .and_then(|p| restrict_map(mesh, faces, p, options))
+        .map(|map| Attempt::Mapped { map, defect: None })
+        .unwrap_or_else(|| flatten_around_degenerate(mesh, faces, options));
+    let (map, defect) = match outcome {
+        Attempt::Mapped { map, defect } => (Some(map), defect),
+        Attempt::NotADiskWithoutDegenerate => {
+            let mut stats = SegmentStats::default();
+            let parts = split_off_degenerate(mesh, faces, &mut stats);
+            return Step::SplitDegenerate {
+                parts,
+                disk_splits: stats.disk_splits,
+            };
+        }
+        Attempt::Failed(e) => (None, Some(ChartDefect::Unparameterizable(e))),
+    };
+    let Some(defect) = defect else {
+        let map = map.unwrap_or_else(|| line_map(mesh, faces));
+        return Step::Keep { map, defect: None };
+    };
+    let parts = if faces.len() >= 2 {
+        split_for(mesh, faces, &defect)
+    } else {
+        None
+    };
+    let Some((pa, pb, cause)) = parts else {
+        // Cannot split (one face): keep it, with a map.
+        let map = map.unwrap_or_else(|| line_map(mesh, faces));
+        return Step::Keep {
+            map,
+            defect: Some(defect),
+        };
+    };
+    let mut stats = SegmentStats::default();
+    let parts = enforce_disks(mesh, vec![pa, pb], &mut stats)
+        .into_iter()
+        .map(|mut part| {
+            part.sort_unstable();
+            debug_assert!(disk_check(mesh, &part, &|f| part.binary_search(&f).is_ok()).is_ok());
+            part
+        })
+        .collect();
+    Step::Split {
+        parts,
+        cause,
+        disk_splits: stats.disk_splits,
+        map,
+        defect,
+    }
+}
