@@ -204,9 +204,11 @@ pub fn generate(
         }
         None => {
             let pack_input = pack_charts_of(&validated, &packed, &chart_triangles, &chart_area_m2);
-            pack_charts(&pack_input, &options.pack, &mut |(done, total)| {
-                progress.advance(Stage::Pack, done, total)
-            })?
+            pack_charts(
+                &pack_input,
+                &options.pack,
+                &mut StageProgress::new(Stage::Pack, progress),
+            )?
         }
     };
     stats.texels_per_unit = packing.texels_per_unit;

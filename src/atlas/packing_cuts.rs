@@ -4,8 +4,6 @@
 //! kept), without a cancel checkpoint of its own: it is bounded to a few validations and
 //! packings of a mesh of at most [`PACKING_CUT_MAX_FACES`] faces. Deterministic.
 
-use std::ops::ControlFlow;
-
 use super::error::AtlasError;
 use super::options::AtlasOptions;
 use super::pack::{pack_charts, Packing, TexelDensity};
@@ -68,7 +66,11 @@ pub(super) fn cut_for_packing(
                 return Ok((1.0, n, None));
             }
             let input = pack_charts_of(v, &packed, &inputs.triangles, &inputs.area_m2);
-            let packing = pack_charts(&input, &options.pack, &mut |_| ControlFlow::Continue(()))?;
+            let packing = pack_charts(
+                &input,
+                &options.pack,
+                &mut StageProgress::ignored(Stage::Pack),
+            )?;
             let page = f64::from(options.pack.width_texels)
                 * f64::from(options.pack.height_texels)
                 * f64::from(packing.num_pages.max(1));

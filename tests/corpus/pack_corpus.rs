@@ -5,7 +5,6 @@
 //! unless `TEXATLAS_CORPUS_ALL` is set.
 //!
 //! Run: `TEXATLAS_CORPUS_DIR=../shared/corpus cargo test --release --test corpus -- pack_corpus:: --nocapture`.
-use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -78,8 +77,12 @@ fn pack_every_corpus_mesh() {
         let borrowed: Vec<_> = charts.iter().map(OwnedChart::as_pack_chart).collect();
         let options = PackOptions::default();
         let t = Instant::now();
-        let packing =
-            pack_charts(&borrowed, &options, &mut |_| ControlFlow::Continue(())).expect("packs");
+        let packing = pack_charts(
+            &borrowed,
+            &options,
+            &mut StageProgress::ignored(Stage::Pack),
+        )
+        .expect("packs");
         let ms = t.elapsed().as_secs_f64() * 1e3;
         let check = check_packing(&borrowed, &packing, &options);
         let name = path

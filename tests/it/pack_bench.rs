@@ -1,19 +1,20 @@
 //! Packing figures on generated chart sets: efficiency (Σ UV area / page area) and time, with
 //! the independent checker of `texatlas::atlas::pack::test_charts`. Prints one line per case;
 //! asserts the stage guarantees. Run: `cargo test --release --test it -- pack_bench:: --nocapture`.
-use std::ops::ControlFlow;
+
 use std::time::Instant;
 
 use texatlas::atlas::pack::test_charts::{
     as_pack_charts, check_packing, mixed_set, realistic_set, OwnedChart,
 };
 use texatlas::atlas::pack::{pack_charts, PackOptions, TexelDensity};
+use texatlas::atlas::{Stage, StageProgress};
 
 fn run(name: &str, charts: &[OwnedChart], options: &PackOptions) {
     let borrowed = as_pack_charts(charts);
     let t = Instant::now();
     let packing =
-        pack_charts(&borrowed, options, &mut |_| ControlFlow::Continue(())).expect("packs");
+        pack_charts(&borrowed, options, &mut StageProgress::ignored(Stage::Pack)).expect("packs");
     let ms = t.elapsed().as_secs_f64() * 1e3;
     let check = check_packing(&borrowed, &packing, options);
     println!(
@@ -34,7 +35,8 @@ fn run(name: &str, charts: &[OwnedChart], options: &PackOptions) {
         ..*options
     };
     let t = Instant::now();
-    let one = pack_charts(&borrowed, &fixed, &mut |_| ControlFlow::Continue(())).expect("packs");
+    let one =
+        pack_charts(&borrowed, &fixed, &mut StageProgress::ignored(Stage::Pack)).expect("packs");
     println!(
         "{:28} one trial at that density: {:8.1} ms, pages {}",
         "",

@@ -58,6 +58,8 @@ mod tests;
 
 use std::ops::ControlFlow;
 
+use super::progress::StageProgress;
+
 mod hull;
 pub mod outline;
 pub mod placement;
@@ -141,9 +143,10 @@ pub const FIT_PROBE_STEP: f64 = 0.01;
 pub fn pack_charts(
     charts: &[PackChart<'_>],
     options: &PackOptions,
-    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
+    progress: &mut StageProgress<'_>,
 ) -> Result<Packing, PackError> {
     options.check()?;
+    let monitor = &mut |(done, total): (usize, usize)| progress.advance(done, total);
     // Each chart's density-independent data on its own (in parallel), then the first error in
     // chart order, whatever the thread count.
     let prepared = {
@@ -180,7 +183,7 @@ pub fn pack_charts(
      -> Result<Trial, PackError> {
         match options.density {
             TexelDensity::TexelsPerUnit(d) => {
-                let mut progress = Progress::new(monitor, order.len());
+                let mut progress = Steps::new(monitor, order.len());
                 let t = ctx.run(d, true, &mut progress)?;
                 progress.finish()?;
                 Ok(t)
@@ -332,13 +335,13 @@ fn check_options(o: &PackOptions) -> Result<(), PackError> {
 }
 
 /// Forwards progress to the caller's monitor, monotonically.
-struct Progress<'m> {
+struct Steps<'m> {
     monitor: &'m mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
     done: usize,
     total: usize,
 }
 
-impl<'m> Progress<'m> {
+impl<'m> Steps<'m> {
     fn new(monitor: &'m mut dyn FnMut((usize, usize)) -> ControlFlow<()>, total: usize) -> Self {
         Self {
             monitor,
@@ -423,7 +426,7 @@ impl Context<'_, '_> {
         &self,
         texels_per_unit: f64,
         multi_page: bool,
-        progress: &mut Progress<'_>,
+        progress: &mut Steps<'_>,
     ) -> Result<Trial, PackError> {
         self.count_trial();
         self.run_uncounted(texels_per_unit, multi_page, progress)
@@ -441,7 +444,7 @@ impl Context<'_, '_> {
         &self,
         texels_per_unit: f64,
         multi_page: bool,
-        progress: &mut Progress<'_>,
+        progress: &mut Steps<'_>,
     ) -> Result<Trial, PackError> {
         let o = self.options;
         let [w, h] = self.page();
@@ -639,7 +642,7 @@ fn fit_to_page(
 ) -> Result<Trial, PackError> {
     let [w, h] = ctx.page();
     let page_area = f64::from(w) * f64::from(h);
-    let mut progress = Progress::new(monitor, ctx.order.len() * (MAX_FIT_TRIALS + FIT_PROBES + 1));
+    let mut progress = Steps::new(monitor, ctx.order.len() * (MAX_FIT_TRIALS + FIT_PROBES + 1));
     let total_area: f64 = ctx.order.iter().map(|&i| ctx.prepared[i].area_m2).sum();
     let does_not_fit = || PackError::DoesNotFit {
         charts: ctx.order.len(),
@@ -709,7 +712,7 @@ fn fit_to_page(
                                 *spec = Some(ctx.run_uncounted(
                                     d2,
                                     false,
-                                    &mut Progress::new(&mut quiet, 1),
+                                    &mut Steps::new(&mut quiet, 1),
                                 ));
                             });
                             ctx.run(d, false, &mut progress)

@@ -7,14 +7,16 @@ use super::test_charts::{
     OwnedChart, PackCheck,
 };
 use super::*;
+use crate::atlas::progress::{ProgressFn, Stage};
 
-fn go(_: (usize, usize)) -> ControlFlow<()> {
-    ControlFlow::Continue(())
+/// No progress wanted, never cancelled.
+fn go() -> StageProgress<'static> {
+    StageProgress::ignored(Stage::Pack)
 }
 
 fn pack(charts: &[OwnedChart], options: &PackOptions) -> (Packing, PackCheck) {
     let borrowed = as_pack_charts(charts);
-    let packing = pack_charts(&borrowed, options, &mut go).unwrap_or_else(|e| panic!("{e}"));
+    let packing = pack_charts(&borrowed, options, &mut go()).unwrap_or_else(|e| panic!("{e}"));
     let check = check_packing(&borrowed, &packing, options);
     (packing, check)
 }
@@ -123,7 +125,7 @@ fn a_chart_larger_than_a_page_is_reported() {
         density: TexelDensity::TexelsPerUnit(10.0),
         ..PackOptions::default()
     };
-    let err = pack_charts(&as_pack_charts(&charts), &options, &mut go).unwrap_err();
+    let err = pack_charts(&as_pack_charts(&charts), &options, &mut go()).unwrap_err();
     assert!(
         matches!(
             err,
@@ -167,7 +169,7 @@ fn invalid_options_say_what_to_use() {
         },
     ];
     for o in bad {
-        match pack_charts(&as_pack_charts(&charts), &o, &mut go) {
+        match pack_charts(&as_pack_charts(&charts), &o, &mut go()) {
             Err(PackError::InvalidOption { detail, .. }) => {
                 assert!(detail.contains("use"), "{detail}")
             }
@@ -203,7 +205,7 @@ fn invalid_charts_are_errors_not_panics() {
         },
     ];
     for c in cases {
-        let err = pack_charts(&[c], &PackOptions::default(), &mut go).unwrap_err();
+        let err = pack_charts(&[c], &PackOptions::default(), &mut go()).unwrap_err();
         assert!(
             matches!(err, PackError::InvalidChart { chart: 0, .. }),
             "{err:?}"
@@ -292,7 +294,7 @@ fn thousands_of_tiny_charts_fit_or_are_refused() {
         height_texels: 64,
         ..PackOptions::default()
     };
-    let err = pack_charts(&as_pack_charts(&charts), &small, &mut go).unwrap_err();
+    let err = pack_charts(&as_pack_charts(&charts), &small, &mut go()).unwrap_err();
     assert!(
         matches!(err, PackError::DoesNotFit { charts: 3000, .. }),
         "{err:?}"
@@ -308,7 +310,7 @@ fn the_checker_catches_overlap_and_padding_violations() {
         ..PackOptions::default()
     };
     let borrowed = as_pack_charts(&charts);
-    let packing = pack_charts(&borrowed, &options, &mut go).unwrap();
+    let packing = pack_charts(&borrowed, &options, &mut go()).unwrap();
     assert_guarantees(&check_packing(&borrowed, &packing, &options), "baseline");
     // Stack chart 1 onto chart 0: the L's corner vertex 0 (all its triangles meet there) onto
     // the disc's centre vertex 0: overlap.
@@ -354,14 +356,17 @@ fn cancellation_stops_with_cancelled() {
     let err = pack_charts(
         &as_pack_charts(&charts),
         &PackOptions::default(),
-        &mut |_| {
-            calls += 1;
-            if calls > 3 {
-                ControlFlow::Break(())
-            } else {
-                ControlFlow::Continue(())
-            }
-        },
+        &mut StageProgress::new(
+            Stage::Pack,
+            &mut ProgressFn(|_: Stage, _: usize, _: usize| {
+                calls += 1;
+                if calls > 3 {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            }),
+        ),
     )
     .unwrap_err();
     assert_eq!(err, PackError::Cancelled);

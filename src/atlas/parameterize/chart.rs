@@ -18,6 +18,7 @@
 use std::collections::BinaryHeap;
 
 use super::ParameterizeError;
+use crate::mesh::vector::{cross, dot, norm, sub};
 
 /// One chart: a connected, manifold, consistently oriented topological disk.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -50,23 +51,6 @@ const DEGENERATE_RELATIVE_AREA: f64 = 1e-12;
 /// "not strictly greater" test every geometric guard here needs.
 pub(crate) fn exceeds(a: f64, b: f64) -> bool {
     a > b
-}
-
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-pub(crate) fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-pub(crate) fn norm3(a: [f64; 3]) -> f64 {
-    dot3(a, a).sqrt()
 }
 
 impl ChartMesh {
@@ -103,8 +87,8 @@ impl ChartMesh {
             }
             let [a, b, c] = t.map(|i| self.positions_m[i as usize]);
             let (e0, e1, e2) = (sub(b, a), sub(c, a), sub(c, b));
-            let longest2 = dot3(e0, e0).max(dot3(e1, e1)).max(dot3(e2, e2));
-            let twice_area = norm3(cross(e0, e1));
+            let longest2 = dot(e0, e0).max(dot(e1, e1)).max(dot(e2, e2));
+            let twice_area = norm(cross(e0, e1));
             if !exceeds(twice_area, DEGENERATE_RELATIVE_AREA * longest2) {
                 return Err(ParameterizeError::DegenerateTriangle { triangle: f as u32 });
             }
@@ -307,7 +291,7 @@ impl ChartTopology {
             let lo = lo.min(hi);
             for (len, &w) in length_m[lo..hi].iter_mut().zip(&self.neighbors[lo..hi]) {
                 if let Some(&pw) = positions_m.get(w as usize) {
-                    *len = norm3(sub(pw, pv));
+                    *len = norm(sub(pw, pv));
                 }
             }
         }

@@ -37,8 +37,9 @@ use crate::numerics::{
     solve_cg, CgOptions, CgOutcome, CsrMatrix, HermitianCholesky, SparseCholesky,
 };
 
-use super::chart::{cross, dot3, exceeds, norm3, sub, ChartMesh, ChartTopology};
+use super::chart::{exceeds, ChartMesh, ChartTopology};
 use super::ParameterizeError;
+use crate::mesh::vector::{cross, dot, norm, sub};
 
 /// Coordinates `(x_k, y_k)` of the triangle's vertices in its local orthonormal basis
 /// (lscm-2002 §2.3): origin at the first vertex, x along the first edge, normal along z.
@@ -46,13 +47,13 @@ use super::ParameterizeError;
 pub fn local_frame_coordinates(p: [[f64; 3]; 3]) -> [[f64; 2]; 3] {
     let e1 = sub(p[1], p[0]);
     let e2 = sub(p[2], p[0]);
-    let l1 = norm3(e1);
+    let l1 = norm(e1);
     let x_axis = [e1[0] / l1, e1[1] / l1, e1[2] / l1];
     let n = cross(e1, e2);
-    let ln = norm3(n);
+    let ln = norm(n);
     let normal = [n[0] / ln, n[1] / ln, n[2] / ln];
     let y_axis = cross(normal, x_axis);
-    [[0.0, 0.0], [l1, 0.0], [dot3(e2, x_axis), dot3(e2, y_axis)]]
+    [[0.0, 0.0], [l1, 0.0], [dot(e2, x_axis), dot(e2, y_axis)]]
 }
 
 /// The complex coefficients `W_1, W_2, W_3` (as `[re, im]`) of lscm-2002 §2.4 and `d_T`, twice
@@ -550,7 +551,7 @@ mod tests {
         for t in &chart.triangles {
             for k in 0..3 {
                 let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
-                let l3 = norm3(sub(chart.positions_m[a], chart.positions_m[b]));
+                let l3 = norm(sub(chart.positions_m[a], chart.positions_m[b]));
                 let l2 = ((uv[a][0] - uv[b][0]).powi(2) + (uv[a][1] - uv[b][1]).powi(2)).sqrt();
                 let r = l2 / l3;
                 let r0 = *ratio.get_or_insert(r);

@@ -71,8 +71,9 @@
 //! Code map: this file (the collapse record, the levels and the replay by vertex splits),
 //! `decimate` (the queue, the validity and importance of a collapse, the collapse).
 
-use super::chart::{dot3, sub, ChartMesh};
+use super::chart::ChartMesh;
 use super::ParameterizeError;
+use crate::mesh::vector::{dot, sub};
 
 mod decimate;
 
@@ -237,17 +238,17 @@ pub fn closest_point_barycentric(
     let ab = sub(b, a);
     let ac = sub(c, a);
     let ap = sub(p, a);
-    let d1 = dot3(ab, ap);
-    let d2 = dot3(ac, ap);
+    let d1 = dot(ab, ap);
+    let d2 = dot(ac, ap);
     let bary = if d1 <= 0.0 && d2 <= 0.0 {
         [1.0, 0.0, 0.0]
     } else {
         let bp = sub(p, b);
-        let d3 = dot3(ab, bp);
-        let d4 = dot3(ac, bp);
+        let d3 = dot(ab, bp);
+        let d4 = dot(ac, bp);
         let cp = sub(p, c);
-        let d5 = dot3(ab, cp);
-        let d6 = dot3(ac, cp);
+        let d5 = dot(ab, cp);
+        let d6 = dot(ac, cp);
         let vc = d1 * d4 - d3 * d2;
         let vb = d5 * d2 - d1 * d6;
         let va = d3 * d6 - d5 * d4;
@@ -273,7 +274,7 @@ pub fn closest_point_barycentric(
     };
     let q = [0, 1, 2].map(|k| bary[0] * a[k] + bary[1] * b[k] + bary[2] * c[k]);
     let d = sub(p, q);
-    (bary, dot3(d, d))
+    (bary, dot(d, d))
 }
 
 #[cfg(test)]
@@ -518,7 +519,7 @@ mod tests {
                 for j in 0..=(200 - i) {
                     let (s, t) = (i as f64 / 200.0, j as f64 / 200.0);
                     let q = [0, 1, 2].map(|k| a[k] + s * (b[k] - a[k]) + t * (c[k] - a[k]));
-                    best = best.min(dot3(sub(p, q), sub(p, q)));
+                    best = best.min(dot(sub(p, q), sub(p, q)));
                 }
             }
             assert!(d2 <= best + 1e-12 && d2 >= best - 1e-3, "{d2} vs {best}");

@@ -5,11 +5,12 @@ use std::f64::consts::PI;
 
 use rayon::prelude::*;
 
-use super::super::chart::{cross, dot3, exceeds, norm3, sub, ChartMesh};
+use super::super::chart::{exceeds, ChartMesh};
 use super::super::ParameterizeError;
 use super::{
     closest_point_barycentric, internal, Collapse, ProgressiveMesh, ProgressiveMeshOptions,
 };
+use crate::mesh::vector::{cross, dot, norm, sub};
 
 /// Decimates a validated chart with hlscm-2003 Algorithm 2. `locked` vertices are never removed
 /// (HLSCM locks the two pins so that every level has them).
@@ -544,7 +545,7 @@ impl<'a> Decimator<'a> {
             let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
             let (ea, eb) = (sub(pa, pu), sub(pb, pu));
             let n_old = cross(ea, eb);
-            angle_sum += norm3(n_old).atan2(dot3(ea, eb));
+            angle_sum += norm(n_old).atan2(dot(ea, eb));
             star.push(StarFace {
                 a,
                 b,
@@ -644,7 +645,7 @@ impl<'a> Decimator<'a> {
         if let Some(w) = other_boundary {
             // The other boundary neighbour w of u: old border w–u–v becomes w–v.
             let pw = self.pos[w as usize];
-            area = 0.5 * norm3(cross(sub(pu, pw), sub(pv, pw)));
+            area = 0.5 * norm(cross(sub(pu, pw), sub(pv, pw)));
         }
         volume.cbrt() + area.sqrt()
     }
@@ -658,7 +659,7 @@ impl<'a> Decimator<'a> {
             if s.a == v || s.b == v {
                 continue; // a face on the edge: it disappears
             }
-            volume += dot3(s.n_old, uv).abs() / 6.0;
+            volume += dot(s.n_old, uv).abs() / 6.0;
         }
         volume
     }
@@ -673,13 +674,13 @@ impl<'a> Decimator<'a> {
             }
             let (pa, pb) = (s.pa, s.pb);
             let n_new = cross(sub(pa, pv), sub(pb, pv));
-            if !exceeds(dot3(s.n_old, n_new), 0.0) {
+            if !exceeds(dot(s.n_old, n_new), 0.0) {
                 return false;
             }
             let e = [sub(pa, pv), sub(pb, pv), sub(pb, pa)];
-            let longest2 = e.iter().map(|x| dot3(*x, *x)).fold(0.0, f64::max);
+            let longest2 = e.iter().map(|x| dot(*x, *x)).fold(0.0, f64::max);
             // Keep coarse triangles well away from the validator's degeneracy threshold.
-            if !exceeds(norm3(n_new), 1e-8 * longest2) {
+            if !exceeds(norm(n_new), 1e-8 * longest2) {
                 return false;
             }
         }
