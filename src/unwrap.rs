@@ -1,5 +1,5 @@
 //! One unwrap of one asset, end to end: the shell around [`atlas::generate`] that the CLI
-//! (`texatlas unwrap`, `texatlas bench`) and the job workers share.
+//! (`texatlas unwrap`, the `pipeline` benchmark) and the job workers share.
 //!
 //! Purpose: decoded [`Asset`] + [`UnwrapSettings`] → the same asset with atlas UVs (bytes), the
 //! [`Atlas`] and the JSON report ([`ReportJson`]), with wall-clock time per step.

@@ -1,22 +1,24 @@
 //! The atlas pipeline: pure, synchronous and deterministic.
 //!
-//! [`generate`] is the one call that joins the geometry core to the service and the CLI:
-//! segment → parameterize + validate → pack → measure. Each stage is a function of the previous
-//! stage's output and its own options:
+//! [`generate`] is the one call that joins the geometry core to the service and the CLI, and
+//! this file holds only the stage order: segment → parameterize → pack → measure. Each stage is
+//! one function of the previous stage's output and its own options:
 //! - [`segment`]: `segment_charts` cuts a [`TriangleMesh`] into charts that are each a topological
-//!   disk (Lévy et al. 2002 §3.1–3.2), and `parameterize_charts` flattens them with [`parameterize`]
-//!   and splits those with flips, UV boundary crossings or too much area distortion (§3.3);
-//! - [`parameterize`]: flattens one chart (LSCM, Lévy et al. 2002 §2; hierarchical LSCM, Ray &
-//!   Lévy 2003);
-//! - [`pack`]: places the flattened charts on texture pages at one texel density, with padding
-//!   (the horizon packer, Lévy et al. 2002 §4, from four directions with rotations, Zhou et al.
-//!   2004 §6); at its start, on small meshes with few charts that pack poorly, the
-//!   packing-aware cuts (`packing_cuts.rs`) cut charts in two when that raises the packing
-//!   efficiency; the packer's input is built in `pack_input.rs`, and charts made only of
-//!   degenerate faces get their UVs in `degenerate.rs`;
-//! - [`measure`]: the quality report, with its definitions.
+//!   disk (Lévy et al. 2002 §3.1–3.2);
+//! - [`parameterize`]: `parameterize_charts` flattens every chart (LSCM, Lévy et al. 2002 §2;
+//!   hierarchical LSCM, Ray & Lévy 2003) and splits and merges charts until every map is valid
+//!   (§3.3);
+//! - [`pack`]: `pack_charts` places the flattened charts on texture pages at one texel density,
+//!   with padding (the horizon packer, Lévy et al. 2002 §4, from four directions with rotations,
+//!   Zhou et al. 2004 §6). At the stage's start, on small meshes with few charts that pack
+//!   poorly, the packing-aware cuts (`packing_cuts.rs`, a feedback loop into the parameterize
+//!   stage) cut charts in two when that raises the packing efficiency; the packer's input is
+//!   built in `pack_input.rs`, and charts made only of degenerate faces get their UVs in
+//!   `degenerate.rs`;
+//! - [`measure`]: `measure_atlas`, the quality report, with its definitions.
 //!
-//! Errors: [`AtlasError`] (`error.rs`).
+//! Progress and cancellation: one [`Progress`] from the caller, seen by each stage through a
+//! [`StageProgress`]. Errors: [`AtlasError`] (`error.rs`).
 //!
 //! Invariant: no IO, no serde, no wall-clock time, no logging; same input, same output bits
 //! whatever the thread count (`tests/architecture.rs` checks the `use` lines). Stage timings are
@@ -52,10 +54,10 @@ use segment::segment_charts;
 pub struct PipelineStats {
     /// Charts proposed by segmentation (after its disk guarantee).
     pub segmented_charts: usize,
-    /// Splits made by validation: flips, UV boundary overlaps, area ratio.
-    pub validation_splits: [usize; 3],
-    /// Small charts merged back by validation.
-    pub validation_merges: usize,
+    /// Splits made by the parameterize stage: flips, UV boundary overlaps, area ratio.
+    pub parameterize_splits: [usize; 3],
+    /// Small charts merged back by the parameterize stage.
+    pub parameterize_merges: usize,
     /// Charts cut in two because that raised the packing efficiency (`cut_for_packing`).
     pub packing_cuts: usize,
     /// Charts kept although their stretch or area ratio is above the bound (could not be split
@@ -81,7 +83,7 @@ pub struct Atlas {
     /// UVs of the 3 corners of each face of the mesh, in face and corner order: normalized page
     /// coordinates in \[0,1\]², as the `f32` values to be written to the file.
     pub corner_uvs: Vec<[[f32; 2]; 3]>,
-    /// The chart of each face (index into the validated charts, ordered by lowest face).
+    /// The chart of each face (index into the parameterized charts, ordered by lowest face).
     pub face_chart: Vec<u32>,
     /// The page of each chart.
     pub chart_page: Vec<u32>,
@@ -95,7 +97,7 @@ pub struct Atlas {
     pub report: AtlasReport,
 }
 
-/// Runs the whole pipeline on `mesh`: segment → parameterize + validate → pack → measure.
+/// Runs the whole pipeline on `mesh`: segment → parameterize → pack → measure.
 ///
 /// Degenerate faces: a chart made only of faces with zero area or a repeated vertex (the mesh
 /// builder isolates the latter, so each arrives as a chart of its own) is not packed: it covers
@@ -129,19 +131,19 @@ pub fn generate(
     )?;
     progress.stage_finished(Stage::Segment);
 
-    // 2. Parameterize and validate.
+    // 2. Parameterize.
     progress.stage_started(Stage::Parameterize);
     check(
         progress.advance(Stage::Parameterize, 0, seg.num_charts()),
         Stage::Parameterize,
     )?;
-    let validated = parameterize_charts(
+    let parameterized = parameterize_charts(
         mesh,
         &seg,
         &options.parameterize,
         &mut StageProgress::new(Stage::Parameterize, progress),
     )?;
-    let n = validated.segmentation.charts.len();
+    let n = parameterized.segmentation.charts.len();
     check(
         progress.advance(Stage::Parameterize, n, n),
         Stage::Parameterize,
@@ -155,16 +157,17 @@ pub fn generate(
     //    their own) have nothing to texture; they take no page space and get their UVs
     //    afterwards (`place_degenerate`).
     progress.stage_started(Stage::Pack);
-    let (validated, packing_cuts, packing_of_cut_step) = cut_for_packing(mesh, validated, options)?;
-    let charts = &validated.segmentation.charts;
+    let (parameterized, packing_cuts, packing_of_cut_step) =
+        cut_for_packing(mesh, parameterized, options)?;
+    let charts = &parameterized.segmentation.charts;
     let mut stats = PipelineStats {
         segmented_charts: seg.num_charts(),
-        validation_splits: validated.splits,
-        validation_merges: validated.merges,
+        parameterize_splits: parameterized.splits,
+        parameterize_merges: parameterized.merges,
         packing_cuts,
         ..PipelineStats::default()
     };
-    for (chart, defect) in &validated.unresolved {
+    for (chart, defect) in &parameterized.unresolved {
         match defect {
             ChartDefect::AreaRatio { .. } | ChartDefect::Stretch { .. } => {
                 stats.bound_unresolved += 1
@@ -181,7 +184,7 @@ pub fn generate(
             ChartDefect::Flipped { .. } | ChartDefect::BoundaryOverlap { .. } => {}
         }
     }
-    for (map, _) in validated.maps.iter().flatten() {
+    for (map, _) in parameterized.maps.iter().flatten() {
         match map.method_used {
             parameterize::ParameterizeMethod::Hierarchical => stats.charts_hierarchical += 1,
             _ => stats.charts_direct += 1,
@@ -191,7 +194,7 @@ pub fn generate(
         triangles: chart_triangles,
         area_m2: chart_area_m2,
         degenerate,
-    } = pack_inputs(mesh, &validated)?;
+    } = pack_inputs(mesh, &parameterized)?;
     let packed: Vec<usize> = (0..charts.len()).filter(|&i| !degenerate[i]).collect();
     let packing = match packing_of_cut_step {
         // The cut step packed exactly these charts already (same inputs, deterministic).
@@ -203,7 +206,8 @@ pub fn generate(
             p
         }
         None => {
-            let pack_input = pack_charts_of(&validated, &packed, &chart_triangles, &chart_area_m2);
+            let pack_input =
+                pack_charts_of(&parameterized, &packed, &chart_triangles, &chart_area_m2);
             pack_charts(
                 &pack_input,
                 &options.pack,

@@ -9,7 +9,7 @@
 //! dropped body before writing the response head, which is a race. When it lost the race, a
 //! client that pools connections sends its next request on a connection the server is closing
 //! and gets "incomplete message" (CI saw exactly this once: the multipart 413 of
-//! `tests/http_service.rs`, right after another refused upload; here, without this middleware,
+//! `tests/it/http_service.rs`, right after another refused upload; here, without this middleware,
 //! the stress test `refusals_before_the_body_is_read_arrive_intact` failed in 1 of 6 runs, and
 //! in 0 of 8 with the client's pool turned off). Closing with unread bytes in
 //! the socket also makes the kernel answer with a TCP reset, which can overtake the response.

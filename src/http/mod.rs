@@ -8,7 +8,7 @@
 //! - Every error is an [`ApiError`] → `application/problem+json` with a stable `code`.
 //! - Handlers never log. Every request gets an id: the client's `x-request-id` when it is 1 to
 //!   64 of `[A-Za-z0-9._-]`, else a new UUIDv7 (tower-http `SetRequestId`, after
-//!   [`drop_unusable_request_id`]); it is echoed in the response's `x-request-id`
+//!   `drop_unusable_request_id`); it is echoed in the response's `x-request-id`
 //!   (`PropagateRequestId`) and in every problem body. tower-http's `TraceLayer` runs the request
 //!   in a `request` span (`request_id`, `method`, `route`, and `job_id` once a handler knows it)
 //!   and logs one line per response with its status and latency (`ms`), at `error` with the

@@ -20,7 +20,7 @@
 //!    fan (non-manifold vertex repair). Final vertices are numbered by (lowest source index, lowest
 //!    corner), so on clean input with every position used, `VertexId(i)` is source vertex `i`.
 //!
-//! Measured (`tests/mesh_build_bench.rs`, opt-level 3, shared 2-core machine under load): about
+//! Measured (`tests/it/mesh_build_bench.rs`, opt-level 3, shared 2-core machine under load): about
 //! 0.25 s for a 1M-triangle grid and 0.35 s for the 1M-triangle `beast_sub2_1M` (random vertex
 //! order costs cache misses), about 130 bytes per face at peak including the input.
 //!

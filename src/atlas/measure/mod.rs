@@ -6,7 +6,7 @@
 //! into an [`AtlasReport`]: stretch, angle and area distortion, charts and seams, flips,
 //! overlaps (exact and sampled), packing, padding, range and texel density. It never trusts
 //! pipeline-internal chart ids: every figure is computed from the output alone, by the
-//! definitions below. `tests/measure_eval_agreement.rs` checks them against an independent
+//! definitions below. `tests/corpus/measure_eval_agreement.rs` checks them against an independent
 //! implementation (the reason for the numpy-exact arithmetic of `numpy.rs`).
 //!
 //! # Definitions

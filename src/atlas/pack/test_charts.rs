@@ -1,5 +1,5 @@
 //! Chart sets generated in code and an independent packing checker: test support for the unit
-//! tests, `tests/pack_bench.rs` and benchmarks. Not part of the pipeline.
+//! tests, `tests/it/pack_bench.rs` and benchmarks. Not part of the pipeline.
 //!
 //! The checker [`check_packing`] shares no code with the packer: it rasterizes each placed chart
 //! by texel-centre sampling the way `../shared/eval/atlas_eval.py` does (a centre on an edge

@@ -46,7 +46,7 @@ fn mixed_shapes_fit_one_page_with_padding_and_good_efficiency() {
     let (packing, check) = pack(&charts, &options);
     assert_eq!(packing.num_pages, 1);
     assert_guarantees(&check, "mixed 60");
-    // Floor well under what the packer reaches (see tests/pack_bench.rs for the figures).
+    // Floor well under what the packer reaches (see tests/it/pack_bench.rs for the figures).
     assert!(check.efficiency > 0.55, "efficiency {check:?}");
 }
 

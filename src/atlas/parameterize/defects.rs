@@ -1,6 +1,6 @@
 //! The tests a chart's map must pass (Lévy et al. 2002 §3.3) and their 2-D predicates.
 //!
-//! Purpose: [`find_defect`] returns the first defect of a map, in the order flips, boundary
+//! Purpose: `find_defect` returns the first defect of a map, in the order flips, boundary
 //! self-intersection or vertex fold, stretch, area ratio; the stage splits the chart by it.
 //!
 //! Predicates: orientation signs are computed in `f64` with a relative tolerance (`orient`): an

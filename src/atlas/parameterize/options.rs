@@ -8,7 +8,7 @@
 use super::FlattenOptions;
 use super::ParameterizeChartsError;
 
-/// Options of [`parameterize_charts`].
+/// Options of [`parameterize_charts`](super::parameterize_charts).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ParameterizeOptions {
     /// The paper's area test (§3.3): largest allowed ratio between the largest and the smallest

@@ -22,7 +22,7 @@
 //!
 //! Every part is passed through the disk guarantee again, so the result still satisfies the
 //! segmentation contract. A part first tries its parent's map restricted to it
-//! ([`super::warm_start`]); zero-area faces are handled by [`super::degenerate`]. A chart the
+//! (`warm_start`); zero-area faces are handled by `degenerate`. A chart the
 //! parameterizer rejects for another reason is split by diameter; a single face that still
 //! fails keeps the line map and is listed in `unresolved` as
 //! [`ChartDefect::Unparameterizable`]. So no chart is ever left without a map.
@@ -31,7 +31,7 @@
 //! and the number of splits is bounded by the face count. Deterministic: the charts of one round
 //! are flattened in parallel (pure functions of the chart and its parent's map) and consumed in
 //! chart order; the merge-back is sequential, and its speculative parallel flattening
-//! ([`super::schedule`]) uses a result only under the exact chart versions it was queued for.
+//! (`schedule`) uses a result only under the exact chart versions it was queued for.
 //!
 //! Units: area ratios are plain ratios (model area per UV area, divided by its minimum over the
 //! chart); UVs in model units, as the parameterizer returns them.
@@ -59,7 +59,7 @@ pub struct ParameterizedCharts {
     /// The map of each chart (same order as `segmentation.charts`). **Contract:** every entry is
     /// `Some`, and its vertex list is exactly `chart_mesh(mesh, &segmentation.charts[i]).1`, so
     /// it covers every vertex of the chart's faces and `uv[l]` is the UV of the chart-local
-    /// vertex `l` of [`chart_mesh`]'s triangles. (`Option` is kept for the stable type; `None`
+    /// vertex `l` of [`chart_mesh`](super::chart_mesh)'s triangles. (`Option` is kept for the stable type; `None`
     /// is never returned.) Zero-area faces map to (near-)degenerate UV triangles (module doc).
     pub maps: Vec<Option<LocatedMap>>,
     /// Charts returned although not valid: chart index and why. Such a chart still has a map

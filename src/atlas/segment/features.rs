@@ -125,7 +125,7 @@ const STRING_TEST_SLACK: f64 = 1e-9;
 /// Deterministic: edges are visited in a fixed order and ties broken by id.
 ///
 /// `progress`: the sharpness of every edge is the first half, growing the curves from the
-/// candidate edges the second, with a checkpoint every [`PROGRESS_EVERY_CANDIDATES`]
+/// candidate edges the second, with a checkpoint every `PROGRESS_EVERY_CANDIDATES`
 /// candidates; `Break` returns [`SegmentError::Cancelled`].
 pub fn detect_features(
     mesh: &TriangleMesh,

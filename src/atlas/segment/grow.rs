@@ -241,7 +241,7 @@ impl Charts {
 /// component) and one heap pass over the half-edges, `O(F log F)`.
 ///
 /// `progress`: the distances are the first quarter, the seeds the second, growing the rest,
-/// with a checkpoint every [`PROGRESS_EVERY_FACES`] faces grown; `Break` returns
+/// with a checkpoint every `PROGRESS_EVERY_FACES` faces grown; `Break` returns
 /// [`SegmentError::Cancelled`].
 pub fn grow_charts(
     mesh: &TriangleMesh,
