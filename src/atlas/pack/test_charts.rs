@@ -8,6 +8,7 @@
 //! page-edge margin, UV range, density spread and packing efficiency.
 use super::{PackChart, PackOptions, Packing};
 use crate::atlas::parameterize::{flatten_chart, ChartMesh, FlattenOptions};
+use crate::mesh::vector::{cross, norm, sub};
 
 /// A chart that owns its data; [`OwnedChart::as_pack_chart`] borrows it for [`super::pack_charts`].
 #[derive(Debug, Clone, PartialEq)]
@@ -163,14 +164,7 @@ pub fn parameterized(chart: &ChartMesh) -> OwnedChart {
         .iter()
         .map(|t| {
             let [a, b, c] = t.map(|i| chart.positions_m[i as usize]);
-            let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-            let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-            let n = [
-                u[1] * v[2] - u[2] * v[1],
-                u[2] * v[0] - u[0] * v[2],
-                u[0] * v[1] - u[1] * v[0],
-            ];
-            0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
+            0.5 * norm(cross(sub(b, a), sub(c, a)))
         })
         .sum();
     OwnedChart {
