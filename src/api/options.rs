@@ -47,9 +47,10 @@ pub enum SolverJson {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(untagged)]
 pub enum UvSetJson {
-    /// `"first_free"`: `TEXCOORD_0` when a primitive has no UVs, else its first unused set.
+    /// `"first_free"`: the lowest set that no triangle primitive of the asset has (`TEXCOORD_0`
+    /// when none has UVs), one set for every primitive.
     Named(UvSetName),
-    /// Replace `TEXCOORD_k`.
+    /// Replace `TEXCOORD_k` on every triangle primitive (added where a primitive lacks it).
     Index(u32),
 }
 
@@ -129,7 +130,8 @@ pub struct OptionsJson {
     /// Solver, default `auto`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub solver: Option<SolverJson>,
-    /// Which `TEXCOORD_k` receives the atlas, default `"first_free"`.
+    /// Which `TEXCOORD_k` receives the atlas on every triangle primitive, default
+    /// `"first_free"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uv_set: Option<UvSetJson>,
     /// Container of the result, default `glb`.

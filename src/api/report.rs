@@ -25,7 +25,10 @@ pub struct ReportJson {
     pub input: InputJson,
     /// Every option with its effective value.
     pub options: OptionsJson,
-    /// The `TEXCOORD_k` written to each triangle primitive, in (mesh, primitive) order.
+    /// The one `TEXCOORD_k` that holds the atlas on every triangle primitive.
+    pub uv_set: u32,
+    /// `uv_set` once per triangle primitive, in (mesh, primitive) order (every entry is the
+    /// same; kept for clients that read a set per primitive).
     pub uv_set_per_primitive: Vec<u32>,
     /// The texture pages and what is on each.
     pub pages: Vec<PageJson>,
@@ -176,6 +179,7 @@ impl ReportJson {
                 mesh_defects: built.defects.len(),
             },
             options: options.clone(),
+            uv_set: encoded.uv_set,
             uv_set_per_primitive: encoded.uv_set_per_primitive.clone(),
             pages,
             quality: QualityJson::from(&atlas.report),

@@ -87,8 +87,8 @@ pub struct OptionFlags {
     /// Solver: auto, direct or hierarchical. Default auto.
     #[arg(long, value_parser = parse_solver)]
     pub solver: Option<SolverJson>,
-    /// Which TEXCOORD_k receives the atlas: `first_free` or a set number k to replace.
-    /// Default first_free.
+    /// Which TEXCOORD_k receives the atlas, one set for every primitive: `first_free` (the
+    /// lowest set no primitive has) or a set number k to replace. Default first_free.
     #[arg(long, value_parser = parse_uv_set)]
     pub uv_set: Option<UvSetJson>,
     /// Output container: glb or gltf. Default: from the output file's extension.

@@ -6,6 +6,11 @@
 //! any renderer can bind one texture per page.
 //!
 //! Invariants:
+//! - One UV set for the asset ([`UvTarget`]): every triangle primitive gets the atlas in the same
+//!   `TEXCOORD_k` ([`EncodedAsset::uv_set`]). A primitive that lacks a set `j < k` gets
+//!   `TEXCOORD_j` as well, pointing at the same accessor as its `TEXCOORD_k` (no data is
+//!   copied), so its sets start at 0 and are continuous as glTF requires. Its other sets keep
+//!   their data; a renderer reading `TEXCOORD_j` there sees the atlas.
 //! - Vertices are split only where needed: a primitive (a part, see below) gets one output
 //!   vertex per distinct (source vertex, UV bits) pair among its faces, numbered in order of
 //!   first use by its corners, so the output is deterministic. Every vertex attribute (NORMAL,
@@ -59,7 +64,7 @@
 //! every primitive of a mesh has the same number), §4.4 (GLB); `KHR_materials_variants`
 //! (mappings live on the primitive).
 use std::collections::hash_map::Entry;
-use std::collections::HashMap;
+use std::collections::{BTreeSet, HashMap};
 use std::ops::Range;
 
 use base64::Engine as _;
@@ -73,16 +78,24 @@ use super::glb::write_glb;
 use super::old_data::{droppable_accessors, live_views};
 use super::triangles::{PrimitiveMode, TrianglePrimitive};
 
-/// Which `TEXCOORD_k` receives the atlas UVs.
+/// Which `TEXCOORD_k` receives the atlas UVs. One `k` for the whole asset: every triangle
+/// primitive gets the atlas in the same set, so a material (or a baker) can point at one
+/// `TEXCOORD_k` for every primitive.
+///
+/// A primitive that lacks some set `j < k` gets `TEXCOORD_j` too, pointing at the same atlas
+/// accessor as `TEXCOORD_k` (no data copied), because glTF requires the indices of a semantic
+/// to start at 0 and be continuous.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum UvTarget {
-    /// `k = 0` when the primitive has no UVs, else the smallest unused index (the lightmap
-    /// convention). The default.
+    /// The lowest `k` that no triangle primitive of the asset uses (`0` when none has UVs). So
+    /// no existing set (a lightmap in `TEXCOORD_1`, say) is overwritten on any primitive. The
+    /// default.
     #[default]
     FirstFree,
-    /// Replace `TEXCOORD_k` (its morph-target displacements are dropped too, since they would
-    /// move the atlas UVs). If the primitive lacks it, `k` must be its first free index, so no
-    /// gap appears in the set numbering.
+    /// Replace `TEXCOORD_k` on every primitive that has it (its morph-target displacements
+    /// are dropped too, since they would move the atlas UVs) and add it on the others. `k`
+    /// must be a set some triangle primitive has, or the [`UvTarget::FirstFree`] set: a
+    /// larger `k` would fill the sets between with copies of the atlas on every primitive.
     Replace(u32),
 }
 
@@ -127,8 +140,11 @@ pub struct EncodeOptions {
 pub struct EncodedAsset {
     /// The file.
     pub bytes: Vec<u8>,
-    /// The `k` of the `TEXCOORD_k` written, per [`Asset::triangle_primitives`] entry (every
-    /// part of a split primitive gets the same `k`).
+    /// The `k` of the one `TEXCOORD_k` that holds the atlas on every triangle primitive (see
+    /// [`UvTarget`]).
+    pub uv_set: u32,
+    /// [`EncodedAsset::uv_set`] once per [`Asset::triangle_primitives`] entry (every entry is
+    /// the same; kept for clients that read a set per primitive).
     pub uv_set_per_primitive: Vec<u32>,
     /// Where the faces of every triangle primitive went: one entry per (primitive, page) that
     /// has at least one face, sorted by (primitive, page), which is (mesh, primitive, page)
@@ -161,16 +177,6 @@ pub struct EncodedPart {
 }
 
 impl EncodedAsset {
-    /// The one UV set written to every triangle primitive, or `None` if they differ (or there
-    /// are no triangle primitives).
-    pub fn common_uv_set(&self) -> Option<u32> {
-        let first = *self.uv_set_per_primitive.first()?;
-        self.uv_set_per_primitive
-            .iter()
-            .all(|&k| k == first)
-            .then_some(first)
-    }
-
     /// The distinct pages that hold at least one part, ascending.
     pub fn pages(&self) -> Vec<u32> {
         let mut pages: Vec<u32> = self.parts.iter().map(|p| p.page).collect();
@@ -218,8 +224,9 @@ pub fn encode(
 /// each part went.
 ///
 /// Errors: [`ErrorCode::UvInput`] when `corner_uvs` or `face_page` does not have one entry per
-/// face of [`Asset::mesh_input`] or a UV is not finite; [`ErrorCode::UvTarget`] as for
-/// [`encode`].
+/// face of [`Asset::mesh_input`] or a UV is not finite; [`ErrorCode::UvTarget`] when
+/// `options.uv_target` is [`UvTarget::Replace`] with a `k` that no triangle primitive has and
+/// that is above the first free set (the error names both ways out).
 ///
 /// Cost: as [`encode`], plus sorting the faces of each multi-page primitive by page
 /// (O(n log n) in its faces) and 8 bytes per face for the per-part face lists.
@@ -271,11 +278,7 @@ pub fn encode_pages(
              (Atlas::face_page), or call encode for a single page",
         ));
     }
-    let targets = asset
-        .primitives
-        .iter()
-        .map(|p| uv_set_for(p, options.uv_target))
-        .collect::<Result<Vec<u32>, GltfError>>()?;
+    let uv_set = asset_uv_set(&asset.primitives, options.uv_target)?;
 
     let mut json = asset.json.clone();
     let mut out = Output::default();
@@ -379,7 +382,8 @@ pub fn encode_pages(
     let mut parts = Vec::new();
     // Parts on a primitive's other pages: (part, its JSON), appended to their mesh below.
     let mut appended: Vec<(EncodedPart, Value)> = Vec::new();
-    for (k, (prim, &uv_set)) in asset.primitives.iter().zip(&targets).enumerate() {
+    let uv_name = format!("TEXCOORD_{uv_set}");
+    for (k, prim) in asset.primitives.iter().enumerate() {
         // A primitive without triangles (a strip of two vertices) has nothing to carry UVs and
         // would need zero-element accessors, which glTF forbids: it stays as it was.
         if prim.faces.is_empty() {
@@ -390,7 +394,11 @@ pub fn encode_pages(
             prim.mesh_index, prim.primitive_index
         );
         let source_prim = asset.json.pointer(&path).cloned().unwrap_or(Value::Null);
-        let uv_name = format!("TEXCOORD_{uv_set}");
+        // The sets below `uv_set` this primitive lacks: they point at the atlas accessor.
+        let fillers: Vec<String> = (0..uv_set)
+            .filter(|j| !prim.texcoord_sets.contains(j))
+            .map(|j| format!("TEXCOORD_{j}"))
+            .collect();
         for (part_number, (page, part_faces)) in faces_by_page(prim.faces.clone(), face_page)
             .into_iter()
             .enumerate()
@@ -414,13 +422,14 @@ pub fn encode_pages(
             };
 
             let mut attributes = Map::new();
-            let mut wrote_uv = false;
+            let mut wrote_uv = None;
             if let Some(source) = source_prim.get("attributes").and_then(Value::as_object) {
                 for (name, value) in source {
                     let index = value.as_u64().unwrap_or(u64::MAX);
                     if *name == uv_name {
-                        attributes.insert(name.clone(), json!(out.push_uvs(&split.uvs)));
-                        wrote_uv = true;
+                        let atlas = out.push_uvs(&split.uvs);
+                        attributes.insert(name.clone(), json!(atlas));
+                        wrote_uv = Some(atlas);
                     } else {
                         let new =
                             gather(name, index, &format!("{path}/attributes/{name}"), &mut out)?;
@@ -428,8 +437,16 @@ pub fn encode_pages(
                     }
                 }
             }
-            if !wrote_uv {
-                attributes.insert(uv_name.clone(), json!(out.push_uvs(&split.uvs)));
+            let atlas = match wrote_uv {
+                Some(atlas) => atlas,
+                None => {
+                    let atlas = out.push_uvs(&split.uvs);
+                    attributes.insert(uv_name.clone(), json!(atlas));
+                    atlas
+                }
+            };
+            for name in &fillers {
+                attributes.insert(name.clone(), json!(atlas));
             }
             let mut new_targets = Vec::new();
             for (t, target) in array(&source_prim, "targets").iter().enumerate() {
@@ -582,29 +599,36 @@ pub fn encode_pages(
     };
     Ok(EncodedAsset {
         bytes,
-        uv_set_per_primitive: targets,
+        uv_set,
+        uv_set_per_primitive: vec![uv_set; asset.primitives.len()],
         parts,
     })
 }
 
-fn uv_set_for(prim: &TrianglePrimitive, target: UvTarget) -> Result<u32, GltfError> {
-    let first_free = (0u32..)
-        .find(|k| !prim.texcoord_sets.contains(k))
-        .unwrap_or(0);
+/// The one `k` of [`UvTarget`] for every primitive of the asset.
+fn asset_uv_set(primitives: &[TrianglePrimitive], target: UvTarget) -> Result<u32, GltfError> {
+    let in_use: BTreeSet<u32> = primitives
+        .iter()
+        .flat_map(|p| p.texcoord_sets.iter().copied())
+        .collect();
+    // At most `in_use.len()` numbers are taken, so one of 0..=len is free.
+    let first_free = (0u32..).find(|k| !in_use.contains(k)).unwrap_or(u32::MAX);
     match target {
         UvTarget::FirstFree => Ok(first_free),
-        UvTarget::Replace(k) if prim.texcoord_sets.contains(&k) || k == first_free => Ok(k),
+        UvTarget::Replace(k) if k <= first_free || in_use.contains(&k) => Ok(k),
         UvTarget::Replace(k) => Err(GltfError::new(
             ErrorCode::UvTarget,
+            "/meshes",
             format!(
-                "/meshes/{}/primitives/{}/attributes",
-                prim.mesh_index, prim.primitive_index
+                "cannot write TEXCOORD_{k}: the triangle primitives use sets {in_use:?} and none \
+                 has TEXCOORD_{first_free}, so every primitive would get TEXCOORD_{first_free}..\
+                 TEXCOORD_{} as mere copies of the atlas",
+                k - 1
             ),
             format!(
-                "cannot write TEXCOORD_{k}: the primitive has sets {:?}, so it would leave a gap",
-                prim.texcoord_sets
+                "set the uv_set option (--uv-set) to first_free (TEXCOORD_{first_free} here) or to a set in use \
+                 ({in_use:?}) to replace it"
             ),
-            format!("replace an existing set or use TEXCOORD_{first_free}"),
         )),
     }
 }

@@ -52,7 +52,8 @@ pub enum ErrorCode {
     LimitExceeded,
     /// `encode` was given UVs that do not match the decoded asset, or non-finite UVs.
     UvInput,
-    /// The requested UV set cannot be written (for example it would leave a gap).
+    /// The requested UV set cannot be written: no primitive has it and it is above the first
+    /// free set, so the sets between would be mere copies of the atlas.
     UvTarget,
     /// An image supplied by the caller has an unrecognised format and no `mimeType`.
     ImageFormat,

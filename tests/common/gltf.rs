@@ -596,3 +596,49 @@ pub fn strip_unknown(value: &mut Value) {
 pub fn torus_glb() -> Vec<u8> {
     glb_of_meshes(&[texatlas::mesh::fixtures::torus(48, 24, 2.0, 0.6)])
 }
+
+/// The `n` of every `TEXCOORD_n` attribute of a primitive, ascending.
+pub fn texcoord_sets(prim: &Value) -> Vec<u32> {
+    let mut sets: Vec<u32> = prim["attributes"]
+        .as_object()
+        .into_iter()
+        .flatten()
+        .filter_map(|(name, _)| name.strip_prefix("TEXCOORD_")?.parse().ok())
+        .collect();
+    sets.sort_unstable();
+    sets
+}
+
+/// Checks the UV sets of one rewritten primitive (`dst`) against its source (`src`), with the
+/// atlas in `TEXCOORD_k`: the output sets are `0..n` without a gap; every attribute name of the
+/// source is still there; the only new names are `TEXCOORD_k` and the `TEXCOORD_j` (`j < k`)
+/// the source lacked, and each of those points at the very accessor of `TEXCOORD_k` (no copy).
+pub fn assert_one_atlas_set(src: &Value, dst: &Value, k: u32, tag: &str) {
+    let sets = texcoord_sets(dst);
+    assert_eq!(
+        sets,
+        (0..sets.len() as u32).collect::<Vec<_>>(),
+        "{tag}: TEXCOORD sets must start at 0 and be continuous"
+    );
+    let atlas = &dst["attributes"][format!("TEXCOORD_{k}")];
+    assert!(atlas.is_u64(), "{tag}: TEXCOORD_{k} written");
+    let before = src["attributes"].as_object().expect("attributes");
+    let after = dst["attributes"].as_object().expect("attributes");
+    for name in before.keys() {
+        assert!(after.contains_key(name), "{tag}: {name} lost");
+    }
+    for (name, accessor) in after {
+        if before.contains_key(name) || *name == format!("TEXCOORD_{k}") {
+            continue;
+        }
+        let j: u32 = name
+            .strip_prefix("TEXCOORD_")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or_else(|| panic!("{tag}: unexpected new attribute {name}"));
+        assert!(j < k, "{tag}: new set {name} above the atlas set {k}");
+        assert_eq!(
+            accessor, atlas,
+            "{tag}: gap-filling {name} must share the atlas accessor"
+        );
+    }
+}

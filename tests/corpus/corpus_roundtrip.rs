@@ -68,12 +68,13 @@ fn check_file(input: &Path, output: &Path, options: &EncodeOptions) -> Result<St
         decode(&bytes, &Resources::new(), &DecodeLimits::default()).map_err(|e| e.to_string())?;
     let faces = asset.mesh_input().triangles.len();
     let encoded = encode(&asset, &test_uvs(faces), options).map_err(|e| e.to_string())?;
-    let k = encoded.common_uv_set().ok_or_else(|| {
-        format!(
+    let k = encoded.uv_set;
+    if encoded.uv_set_per_primitive.iter().any(|&s| s != k) {
+        return Err(format!(
             "UV sets differ between primitives: {:?}",
             encoded.uv_set_per_primitive
-        )
-    })?;
+        ));
+    }
     std::fs::write(output, &encoded.bytes).map_err(|e| e.to_string())?;
     let k_arg = k.to_string();
     let report = tools_common::evaluate(
@@ -112,18 +113,80 @@ fn generated_asset_passes_the_validator_and_evaluator() {
     }
     let dir = std::env::temp_dir().join(format!("texatlas-generated-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
-    let input = dir.join("kitchen_sink.glb");
-    std::fs::write(&input, gltf_common::kitchen_sink().glb()).expect("write");
-    // Its meshes differ in existing UV sets; replacing set 0 gives the evaluator one set to read.
-    let options = EncodeOptions {
-        uv_target: UvTarget::Replace(0),
-        ..EncodeOptions::default()
-    };
-    let result = tools_common::validate(&input)
-        .and_then(|_| check_file(&input, &dir.join("kitchen_sink_out.glb"), &options));
-    let _ = std::fs::remove_dir_all(&dir);
-    match result {
-        Ok(line) => println!("kitchen_sink.glb: {line}"),
-        Err(why) => panic!("kitchen_sink.glb: {why}"),
+    // Their primitives differ in existing UV sets (the kitchen sink: TEXCOORD_0 on one, none
+    // on two; mixed_sets: none, TEXCOORD_0, TEXCOORD_0 + TEXCOORD_1): first_free puts the
+    // atlas in the one set no primitive has, an explicit set replaces it everywhere; either
+    // way the primitives with fewer sets get gap-filling sets and the output must be valid.
+    let cases = [
+        (
+            "kitchen_sink",
+            gltf_common::kitchen_sink().glb(),
+            UvTarget::FirstFree,
+        ),
+        (
+            "kitchen_sink",
+            gltf_common::kitchen_sink().glb(),
+            UvTarget::Replace(0),
+        ),
+        ("mixed_sets", mixed_sets().glb(), UvTarget::FirstFree),
+        ("mixed_sets", mixed_sets().glb(), UvTarget::Replace(1)),
+    ];
+    let mut failures = Vec::new();
+    for (name, glb, uv_target) in cases {
+        let input = dir.join(format!("{name}.glb"));
+        std::fs::write(&input, glb).expect("write");
+        let options = EncodeOptions {
+            uv_target,
+            ..EncodeOptions::default()
+        };
+        let result = tools_common::validate(&input)
+            .and_then(|_| check_file(&input, &dir.join(format!("{name}_out.glb")), &options));
+        match result {
+            Ok(line) => println!("{name}.glb ({uv_target:?}): {line}"),
+            Err(why) => failures.push(format!("{name}.glb ({uv_target:?}): {why}")),
+        }
     }
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Three primitives of one 2 × 2 quad grid each, in three meshes: no UVs, `TEXCOORD_0`, and
+/// `TEXCOORD_0` + `TEXCOORD_1` (a lightmap).
+fn mixed_sets() -> gltf_common::Builder {
+    let mut b = gltf_common::Builder::new();
+    let mut positions = Vec::new();
+    for y in 0..3 {
+        for x in 0..3 {
+            positions.push([x as f32, y as f32, 0.0f32]);
+        }
+    }
+    let mut indices = Vec::new();
+    for y in 0..2u32 {
+        for x in 0..2u32 {
+            let v = y * 3 + x;
+            indices.extend([v, v + 1, v + 4, v, v + 4, v + 3]);
+        }
+    }
+    for (m, sets) in [0u32, 1, 2].into_iter().enumerate() {
+        let shifted: Vec<[f32; 3]> = positions
+            .iter()
+            .map(|p| [p[0] + 3.0 * m as f32, p[1], p[2]])
+            .collect();
+        let mut attributes = serde_json::json!({"POSITION": b.floats(&shifted)});
+        for j in 0..sets {
+            let uv: Vec<[f32; 2]> = positions
+                .iter()
+                .map(|p| [p[0] / 2.0, (p[1] + j as f32) / 3.0])
+                .collect();
+            attributes[format!("TEXCOORD_{j}")] = serde_json::json!(b.floats(&uv));
+        }
+        let indices = b.indices(&indices);
+        let mesh = b.push(
+            "meshes",
+            serde_json::json!({"primitives": [{"attributes": attributes, "indices": indices}]}),
+        );
+        b.push("nodes", serde_json::json!({"mesh": mesh}));
+    }
+    b.push("scenes", serde_json::json!({"nodes": [0, 1, 2]}));
+    b
 }

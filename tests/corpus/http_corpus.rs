@@ -73,10 +73,14 @@ async fn corpus_assets_through_the_service() {
             }
             // The independent evaluator's round trip: every input attribute and position comes
             // back per corner, and the atlas has no flip, overlap or padding violation.
-            let k = report["uv_set_per_primitive"][0]
-                .as_u64()
-                .expect("a UV set")
-                .to_string();
+            let k = report["uv_set"].as_u64().expect("a UV set");
+            assert!(
+                report["uv_set_per_primitive"]
+                    .as_array()
+                    .is_some_and(|s| s.iter().all(|s| s.as_u64() == Some(k))),
+                "{name}: one UV set: {report:#}"
+            );
+            let k = k.to_string();
             let e = tools_common::evaluate(
                 &eval,
                 &file,

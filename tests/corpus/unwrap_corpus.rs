@@ -84,14 +84,14 @@ fn check(input: &Path, out_dir: &Path, name: &str) -> Result<(), String> {
         &std::fs::read_to_string(&report_path).map_err(|e| format!("report: {e}"))?,
     )
     .map_err(|e| format!("report is not JSON: {e}"))?;
+    let k = report["uv_set"].as_u64().ok_or("report has no uv_set")?;
     let sets: Vec<u64> = report["uv_set_per_primitive"]
         .as_array()
         .map(|a| a.iter().filter_map(serde_json::Value::as_u64).collect())
         .unwrap_or_default();
-    let k = *sets.first().ok_or("report lists no UV set")?;
-    if sets.iter().any(|&s| s != k) {
+    if sets.is_empty() || sets.iter().any(|&s| s != k) {
         return Err(format!(
-            "UV sets differ between primitives ({sets:?}); the evaluator reads one"
+            "UV sets differ between primitives ({sets:?}, uv_set {k}); the evaluator reads one"
         ));
     }
     let k_arg = k.to_string();

@@ -187,7 +187,10 @@ fn check_split(
         assert_eq!(corners.len(), faces.len(), "{tag}: only its own faces");
         let before = input.corner_attributes(src);
         let after = out.corner_attributes(dst);
-        let uv_name = format!("TEXCOORD_{}", encoded.uv_set_per_primitive[part.primitive]);
+        let k = encoded.uv_set_per_primitive[part.primitive];
+        assert_eq!(k, encoded.uv_set, "{tag}: one UV set for the asset");
+        let uv_name = format!("TEXCOORD_{k}");
+        gltf_common::assert_one_atlas_set(src, dst, k, &tag);
         for (key, values) in &before {
             assert_ne!(key, &uv_name, "FirstFree wrote over an existing set");
             let values = values.as_array().expect("per corner");

@@ -28,6 +28,12 @@ fn check_round_trip(
     replaced: bool,
 ) {
     let out = parse(output);
+    // 0. One atlas set for the whole asset.
+    assert_eq!(uv_sets.len(), asset.triangle_primitives().len());
+    assert!(
+        uv_sets.iter().all(|&k| k == uv_sets[0]),
+        "one UV set for every primitive: {uv_sets:?}"
+    );
     // 1. Untouched top-level properties.
     for (key, value) in input.json.as_object().expect("object") {
         if !REWRITTEN.contains(&key.as_str()) {
@@ -132,6 +138,8 @@ fn check_round_trip(
             );
             let k = uv_sets[tri_index];
             let uv_name = format!("TEXCOORD_{k}");
+            // Continuous sets; the sets below k the source lacked share the atlas accessor.
+            gltf_common::assert_one_atlas_set(prim, out_prim, k, &format!("{m}/{p}"));
             let before = input.corner_attributes(prim);
             let after = out.corner_attributes(out_prim);
             for (key, values) in &before {
@@ -245,6 +253,10 @@ fn round_trip(
         }
     };
     let replaced = matches!(options.uv_target, UvTarget::Replace(_));
+    assert!(encoded
+        .uv_set_per_primitive
+        .iter()
+        .all(|&k| k == encoded.uv_set));
     check_round_trip(
         &input,
         &asset,
@@ -402,8 +414,16 @@ fn kitchen_sink_round_trips_glb_and_gltf() {
                 ..EncodeOptions::default()
             },
         );
-        assert_eq!(sets, vec![1, 0, 0], "first free set");
+        // The grid has TEXCOORD_0, the fan and the strip none: all get the atlas in TEXCOORD_1,
+        // and the fan and the strip get TEXCOORD_0 pointing at the same accessor.
+        assert_eq!(sets, vec![1, 1, 1], "first set no primitive has");
         let doc = parse(&out);
+        let fan = &doc.json["meshes"][1]["primitives"][0]["attributes"];
+        assert!(fan["TEXCOORD_1"].is_u64());
+        assert_eq!(
+            fan["TEXCOORD_0"], fan["TEXCOORD_1"],
+            "filler shares the atlas"
+        );
         assert_eq!(out.starts_with(b"glTF"), format == OutputFormat::Glb);
         // Quantized stays quantized; custom attribute keeps its type.
         let grid = &doc.json["meshes"][0]["primitives"][0]["attributes"];
@@ -497,6 +517,23 @@ fn replace_target_overwrites_a_chosen_set() {
         .get("TEXCOORD_1")
         .is_none());
 
+    // The first free set (1, which no primitive has) on every primitive: the fan and the
+    // strip, without UVs, get TEXCOORD_0 too, sharing the atlas accessor (checked by
+    // `round_trip`); the grid keeps its TEXCOORD_0.
+    let (_, out, sets) = round_trip(
+        &glb,
+        &Resources::new(),
+        EncodeOptions {
+            uv_target: UvTarget::Replace(1),
+            ..EncodeOptions::default()
+        },
+    );
+    assert_eq!(sets, vec![1, 1, 1]);
+    let doc = parse(&out);
+    let strip = &doc.json["meshes"][2]["primitives"][2]["attributes"];
+    assert_eq!(strip["TEXCOORD_0"], strip["TEXCOORD_1"]);
+
+    // Set 3: no primitive has it and set 1 is free, so sets 1 and 2 would be mere copies.
     let asset = decode(&glb, &Resources::new(), &DecodeLimits::default()).expect("decodes");
     let err = encode(
         &asset,
@@ -508,7 +545,13 @@ fn replace_target_overwrites_a_chosen_set() {
     )
     .expect_err("gap");
     assert_eq!(err.code, ErrorCode::UvTarget);
-    assert_eq!(err.json_path, "/meshes/0/primitives/0/attributes");
+    assert_eq!(err.json_path, "/meshes");
+    assert!(err.detail.contains("TEXCOORD_3"), "{}", err.detail);
+    assert!(
+        err.fix.contains("first_free (TEXCOORD_1 here)") && err.fix.contains("{0}"),
+        "the hint names both ways out: {}",
+        err.fix
+    );
 }
 
 #[test]
@@ -909,6 +952,62 @@ mod properties {
                 .collect();
             let encoded = encode(&asset, &uvs, &EncodeOptions::default()).expect("encodes");
             check_round_trip(&input, &asset, &uvs, &encoded.bytes, &encoded.uv_set_per_primitive, false);
+        }
+
+        /// One UV set for the whole asset, over random UV-set layouts per primitive (none,
+        /// TEXCOORD_0, TEXCOORD_0 + TEXCOORD_1, ... up to 3 sets), with first_free and with an
+        /// explicit `Replace(1)`: every primitive gets the atlas in the same TEXCOORD_k (k = the
+        /// most sets any primitive has, for first_free), its sets stay continuous, the sets
+        /// below k it lacked share the atlas accessor, and every other attribute (existing sets
+        /// included) comes back byte for byte per corner (`check_round_trip`). `Replace(1)` is
+        /// refused, naming the way out, only when no primitive has any UV set.
+        #[test]
+        fn one_uv_set_for_any_set_layout(
+            layouts in prop::collection::vec((3usize..12, 0u32..4, any::<bool>()), 1..5),
+            replace in any::<bool>(),
+        ) {
+            let mut b = Builder::new();
+            let mut meshes: Vec<Vec<Value>> = vec![Vec::new(), Vec::new()];
+            for (p, (n, sets, own_mesh)) in layouts.iter().enumerate() {
+                let n = n / 3 * 3;
+                let pos: Vec<[f32; 3]> = (0..n).map(|i| [i as f32, (i * i % 5) as f32, p as f32]).collect();
+                let mut attributes = json!({"POSITION": b.floats(&pos)});
+                for j in 0..*sets {
+                    let uv: Vec<[f32; 2]> = (0..n).map(|i| [i as f32 * 0.1 + j as f32, p as f32]).collect();
+                    attributes[format!("TEXCOORD_{j}")] = json!(b.floats(&uv));
+                }
+                meshes[usize::from(*own_mesh)].push(json!({"attributes": attributes}));
+            }
+            for prims in meshes.into_iter().filter(|m| !m.is_empty()) {
+                let mesh = b.push("meshes", json!({"primitives": prims}));
+                b.push("nodes", json!({"mesh": mesh}));
+            }
+            let glb = b.glb();
+            let input = parse(&glb);
+            let asset = decode(&glb, &Resources::new(), &DecodeLimits::default()).expect("decodes");
+            let uvs = test_uvs(&asset);
+            let most_sets = layouts.iter().map(|l| l.1).max().unwrap_or(0);
+            let options = EncodeOptions {
+                uv_target: if replace { UvTarget::Replace(1) } else { UvTarget::FirstFree },
+                ..EncodeOptions::default()
+            };
+            let result = encode(&asset, &uvs, &options);
+            if replace && most_sets == 0 {
+                let err = result.expect_err("set 1 with no set in use leaves TEXCOORD_0 a copy");
+                prop_assert_eq!(err.code, ErrorCode::UvTarget);
+                prop_assert!(err.fix.contains("first_free (TEXCOORD_0 here)"), "{}", err.fix);
+                return Ok(());
+            }
+            let encoded = result.expect("encodes");
+            let k = if replace { 1 } else { most_sets };
+            prop_assert_eq!(encoded.uv_set, k);
+            prop_assert_eq!(&encoded.uv_set_per_primitive, &vec![k; layouts.len()]);
+            check_round_trip(&input, &asset, &uvs, &encoded.bytes, &encoded.uv_set_per_primitive, replace);
+            // Decoding the output again: every primitive has at least k + 1 sets.
+            let again = decode(&encoded.bytes, &Resources::new(), &DecodeLimits::default()).expect("output decodes");
+            for prim in again.triangle_primitives() {
+                prop_assert!(prim.texcoord_sets.len() as u32 > k);
+            }
         }
     }
 }
