@@ -616,20 +616,35 @@ fn asset_uv_set(primitives: &[TrianglePrimitive], target: UvTarget) -> Result<u3
     match target {
         UvTarget::FirstFree => Ok(first_free),
         UvTarget::Replace(k) if k <= first_free || in_use.contains(&k) => Ok(k),
-        UvTarget::Replace(k) => Err(GltfError::new(
-            ErrorCode::UvTarget,
-            "/meshes",
-            format!(
-                "cannot write TEXCOORD_{k}: the triangle primitives use sets {in_use:?} and none \
-                 has TEXCOORD_{first_free}, so every primitive would get TEXCOORD_{first_free}..\
-                 TEXCOORD_{} as mere copies of the atlas",
-                k - 1
-            ),
-            format!(
-                "set the uv_set option (--uv-set) to first_free (TEXCOORD_{first_free} here) or to a set in use \
-                 ({in_use:?}) to replace it"
-            ),
-        )),
+        UvTarget::Replace(k) => {
+            let (uses, replace) = if in_use.is_empty() {
+                (
+                    "no triangle primitive has a UV set".to_string(),
+                    String::new(),
+                )
+            } else {
+                (
+                    format!(
+                        "the triangle primitives use sets {in_use:?} and none has \
+                         TEXCOORD_{first_free}"
+                    ),
+                    format!(" or to a set in use ({in_use:?}) to replace it"),
+                )
+            };
+            Err(GltfError::new(
+                ErrorCode::UvTarget,
+                "/meshes",
+                format!(
+                    "cannot write TEXCOORD_{k}: {uses}, so every primitive would get \
+                     TEXCOORD_{first_free}..TEXCOORD_{} as mere copies of the atlas",
+                    k - 1
+                ),
+                format!(
+                    "set the uv_set option (--uv-set) to first_free (TEXCOORD_{first_free} \
+                     here){replace}"
+                ),
+            ))
+        }
     }
 }
 
