@@ -1,5 +1,5 @@
-//! `cargo bench --bench pipeline -- [FILES…] [--peers] [--eval] [--eval-dir DIR]`: the whole
-//! pipeline per file, beside xatlas and uvunwrap.
+//! `cargo bench --bench pipeline -- [FILES…] [--peers] [--pack-peers] [--eval] [--eval-dir DIR]`:
+//! the whole pipeline per file, beside xatlas and uvunwrap.
 //!
 //! Purpose: time, memory and quality next to the peers, on the same machine, in the same run.
 //!
@@ -14,6 +14,8 @@
 //!   timing of the library calls only (`xatlas_s`, `uvunwrap_s`: no file IO, which favours the
 //!   peers). Then `atlas_eval.py` measures **all three outputs** (ours included), so the quality
 //!   columns compare like with like; our own report's figures are kept beside them.
+//! - with `--pack-peers`, packing alone: our charts packed again by xatlas's and uvunwrap's
+//!   packers, a second table (module [`pack_peers`]).
 //!
 //! `EVAL_DIR` is `--eval-dir`, else `$TEXATLAS_EVAL_DIR`, else `../shared/eval`; the corpus (used
 //! when no file is given) is `--corpus`, else `$TEXATLAS_CORPUS_DIR`, else `../shared/corpus`.
@@ -30,6 +32,8 @@ use texatlas::atlas::NoProgress;
 use texatlas::unwrap::unwrap_asset;
 
 mod common;
+#[path = "pipeline/pack_peers.rs"]
+mod pack_peers;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -59,6 +63,10 @@ struct PipelineArgs {
     /// measure every output with the evaluator; print the ratios.
     #[arg(long)]
     peers: bool,
+    /// Also pack our charts again with xatlas's and uvunwrap's packers (benches/pack_peers.py),
+    /// measure every packing with the evaluator and print a pack-only table.
+    #[arg(long)]
+    pack_peers: bool,
     /// Measure our outputs with the evaluator too (implied by --peers).
     #[arg(long)]
     eval: bool,
@@ -122,7 +130,7 @@ fn main() -> ExitCode {
 
 fn bench(args: &PipelineArgs) -> anyhow::Result<()> {
     let json = args.json;
-    let rows = run(args, |row| {
+    let BenchRows { rows, pack } = run(args, |row| {
         if !json {
             match &row.error {
                 Some(e) => eprintln!("{} {}: failed: {e}", row.file, row.tool),
@@ -133,16 +141,26 @@ fn bench(args: &PipelineArgs) -> anyhow::Result<()> {
             }
         }
     })?;
-    if json {
+    if json && args.pack_peers {
+        let both = serde_json::json!({ "pipeline": rows, "pack": pack });
+        println!("{}", serde_json::to_string_pretty(&both)?);
+    } else if json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
     } else {
         print!("{}", format_table(&rows));
+        if args.pack_peers {
+            println!();
+            print!(
+                "{}",
+                pack_peers::format_pack_table(&pack, args.resolution, args.padding)
+            );
+        }
     }
     Ok(())
 }
 
 /// The files of `args`, every tool on each.
-fn run(args: &PipelineArgs, on_row: impl FnMut(&PipelineRow)) -> anyhow::Result<Vec<PipelineRow>> {
+fn run(args: &PipelineArgs, on_row: impl FnMut(&PipelineRow)) -> anyhow::Result<BenchRows> {
     let mut files = if args.files.is_empty() {
         corpus_files(&args.corpus).with_context(|| {
             "no files given and no corpus found; pass files or --corpus DIR".to_string()
@@ -165,6 +183,7 @@ fn run(args: &PipelineArgs, on_row: impl FnMut(&PipelineRow)) -> anyhow::Result<
         exe: std::env::current_exe()?,
         eval_dir: args.eval_dir.clone(),
         peers: args.peers,
+        pack_peers: args.pack_peers,
         eval: args.eval,
         resolution: args.resolution,
         padding: args.padding,
@@ -204,6 +223,13 @@ fn child(args: &ChildArgs) -> anyhow::Result<()> {
         peak_mib: common::peak_rss_mib(),
         eval: None,
         report: Quality::from_report(&report),
+        pack_s: report
+            .pointer("/timings_s/pack")
+            .and_then(serde_json::Value::as_f64),
+        uv_sets: report
+            .get("uv_set_per_primitive")
+            .and_then(serde_json::Value::as_array)
+            .map(|a| a.iter().filter_map(serde_json::Value::as_u64).collect()),
         error: None,
     };
     println!("{}", serde_json::to_string(&row)?);
@@ -229,6 +255,13 @@ struct PipelineRow {
     eval: Option<Quality>,
     /// Quality from texatlas's own report (texatlas only).
     report: Option<Quality>,
+    /// The pack stage's seconds from our report, `timings_s.pack` (texatlas only).
+    #[serde(default)]
+    pack_s: Option<f64>,
+    /// The atlas's TEXCOORD index per triangle primitive, the report's `uv_set_per_primitive`
+    /// (texatlas only).
+    #[serde(default)]
+    uv_sets: Option<Vec<u64>>,
     /// Why the tool failed on this file, if it did.
     error: Option<String>,
 }
@@ -289,6 +322,8 @@ struct BenchConfig {
     eval_dir: PathBuf,
     /// Run the peers (implies `eval`).
     peers: bool,
+    /// Pack our charts again with the peers' packers.
+    pack_peers: bool,
     /// Measure every output with the evaluator.
     eval: bool,
     /// Page side, texels.
@@ -312,15 +347,31 @@ fn corpus_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-/// Runs every tool on every file; `on_row` sees each row as it is measured.
+/// The rows of a run: whole pipelines, and packing alone (`--pack-peers`).
+#[derive(Debug, Default)]
+struct BenchRows {
+    rows: Vec<PipelineRow>,
+    pack: Vec<pack_peers::PackRow>,
+}
+
+/// Runs every tool on every file; `on_row` sees each pipeline row as it is measured.
 fn run_bench(
     files: &[PathBuf],
     config: &BenchConfig,
     mut on_row: impl FnMut(&PipelineRow),
-) -> anyhow::Result<Vec<PipelineRow>> {
+) -> anyhow::Result<BenchRows> {
     std::fs::create_dir_all(&config.work_dir)
         .with_context(|| format!("creating {}", config.work_dir.display()))?;
+    let pack_config = pack_peers::PackPeersConfig {
+        script: pack_peers::script(),
+        eval_dir: config.eval_dir.clone(),
+        resolution: config.resolution,
+        padding: config.padding,
+        timeout: config.peer_timeout,
+        work_dir: config.work_dir.clone(),
+    };
     let mut rows = Vec::new();
+    let mut pack = Vec::new();
     for file in files {
         let name = file
             .file_name()
@@ -338,6 +389,23 @@ fn run_bench(
         }
         let triangles = row.triangles;
         on_row(&row);
+        if config.pack_peers && row.error.is_none() {
+            let packed = pack_peers::pack_rows(
+                &name,
+                file,
+                &ours_out,
+                row.uv_sets.as_deref().unwrap_or_default(),
+                row.pack_s,
+                row.report.map(|q| q.charts),
+                &pack_config,
+            );
+            for p in &packed {
+                if let Some(e) = &p.error {
+                    eprintln!("{} pack {}: failed: {e}", p.file, p.packer);
+                }
+            }
+            pack.extend(packed);
+        }
         rows.push(row);
         if config.peers {
             for tool in ["xatlas", "uvunwrap"] {
@@ -358,7 +426,7 @@ fn run_bench(
             }
         }
     }
-    Ok(rows)
+    Ok(BenchRows { rows, pack })
 }
 
 fn run_ours(file: &Path, out: &Path, config: &BenchConfig) -> PipelineRow {
@@ -578,13 +646,25 @@ mod self_tests {
             "a_file_that_fails_is_a_row_with_its_error",
             a_file_that_fails_is_a_row_with_its_error,
         ),
+        (
+            "pack_eval_reads_the_evaluators_keys_and_refuses_a_missing_one",
+            pack_eval_reads_the_evaluators_keys_and_refuses_a_missing_one,
+        ),
+        (
+            "the_pack_script_output_parses",
+            the_pack_script_output_parses,
+        ),
+        (
+            "the_pack_table_notes_merged_and_split_charts_and_gives_time_ratios",
+            the_pack_table_notes_merged_and_split_charts_and_gives_time_ratios,
+        ),
     ];
 
     fn unwraps_a_fixture_in_a_child_process_with_stage_times_and_quality() {
         let fixture = common::fixture("Box.glb");
         let cli = Cli::try_parse_from(["pipeline".as_ref(), fixture.as_os_str()]).expect("args");
         assert!(cli.child.is_none() && !cli.args.peers && !cli.args.eval);
-        let rows = run(&cli.args, |_| {}).expect("bench");
+        let rows = run(&cli.args, |_| {}).expect("bench").rows;
         assert_eq!(rows.len(), 1, "{rows:?}");
         let row = &rows[0];
         assert_eq!(
@@ -604,8 +684,99 @@ mod self_tests {
         assert!(quality.charts >= 1);
         assert_eq!((quality.flipped, quality.overlaps), (0, 0));
         assert!(row.eval.is_none(), "no evaluator without --eval");
+        let pack_s = row.pack_s.expect("timings_s.pack from our report");
+        assert!(
+            pack_s.is_finite() && pack_s >= 0.0 && pack_s <= row.total_s,
+            "{row:?}"
+        );
+        assert_eq!(
+            row.uv_sets.as_ref().map(Vec::len),
+            Some(1),
+            "one UV set for Box's one triangle primitive: {row:?}"
+        );
         let table = format_table(&rows);
         assert!(table.contains("| Box.glb | texatlas | 12 |"), "{table}");
+    }
+
+    fn pack_eval_reads_the_evaluators_keys_and_refuses_a_missing_one() {
+        let mut v = serde_json::json!({
+            "charts": 21,
+            "packing_efficiency": 0.6615,
+            "overlap": {"pairs": 3, "fraction": 0.0},
+            "padding": {"padding": 2, "violation_texels": 17},
+            "out_of_range_corners": 0,
+            "roundtrip": {"position_mismatched_triangles": 5, "ok": false},
+        });
+        assert_eq!(
+            pack_peers::PackEval::from_eval(&v),
+            Some(pack_peers::PackEval {
+                charts: 21,
+                packing: 0.6615,
+                overlaps: 3,
+                padding_violation_texels: 17,
+                out_of_range_corners: 0,
+                position_mismatched_triangles: 5,
+            })
+        );
+        v["padding"]
+            .as_object_mut()
+            .expect("object")
+            .remove("violation_texels");
+        assert_eq!(pack_peers::PackEval::from_eval(&v), None);
+    }
+
+    fn the_pack_script_output_parses() {
+        let text = r#"{"input": "bunny.texatlas.glb", "uv_area": 0.66, "packers": [
+            {"packer": "texatlas", "glb": "/w/a.glb", "pack_s": null, "packings": null,
+             "page": [1024, 1024], "pages": 1, "area_scale_spread": 1.0, "notes": []},
+            {"packer": "xatlas-bisect", "glb": "/w/b.glb", "pack_s": 1.25, "packings": 11,
+             "page": [1024, 1024], "pages": 1, "area_scale_spread": null, "notes": ["11 packings"]}]}"#;
+        let out: pack_peers::ScriptOutput = serde_json::from_str(text).expect("parses");
+        assert_eq!(out.packers.len(), 2);
+        let b = &out.packers[1];
+        assert_eq!(
+            (b.packer.as_str(), b.glb.as_path(), b.pack_s, b.packings),
+            ("xatlas-bisect", Path::new("/w/b.glb"), Some(1.25), Some(11))
+        );
+        assert_eq!((b.area_scale_spread, b.notes.len()), (None, 1));
+        assert_eq!(out.packers[0].pack_s, None);
+    }
+
+    fn the_pack_table_notes_merged_and_split_charts_and_gives_time_ratios() {
+        let row = |packer: &str, pack_s: f64, packings: u32, charts: u64| pack_peers::PackRow {
+            file: "bunny.glb".into(),
+            packer: packer.into(),
+            pack_s: Some(pack_s),
+            packings: Some(packings),
+            eval: Some(pack_peers::PackEval {
+                charts,
+                packing: 0.5,
+                ..pack_peers::PackEval::default()
+            }),
+            ..pack_peers::PackRow::default()
+        };
+        let mut rows = vec![
+            row("texatlas", 0.1, 1, 21),
+            row("xatlas-bisect", 1.1, 11, 21),
+            row("xatlas-plain", 0.05, 1, 20),
+            row("uvunwrap", 0.2, 1, 23),
+        ];
+        pack_peers::add_chart_notes(&mut rows, Some(22));
+        assert_eq!(rows[0].notes, ["our report counts 22 charts"]);
+        assert!(rows[1].notes.is_empty(), "{:?}", rows[1].notes);
+        assert_eq!(rows[2].notes, ["merged charts: 20 of our 21"]);
+        assert_eq!(rows[3].notes, ["split charts: 23 from our 21"]);
+        let table = pack_peers::format_pack_table(&rows, 1024, 2);
+        assert!(
+            table.contains("| bunny.glb | xatlas-plain | 20 | 0.050 | 0.500 | 0 | 0 | merged charts: 20 of our 21 |"),
+            "{table}"
+        );
+        assert!(
+            table.contains(
+                "- bunny.glb: xatlas-bisect 11.00× (11 packings; one packing 1.00×), xatlas-plain 0.50×, uvunwrap 2.00×"
+            ),
+            "{table}"
+        );
     }
 
     fn a_file_that_fails_is_a_row_with_its_error() {
@@ -613,7 +784,7 @@ mod self_tests {
         let bad = dir.path().join("bad.glb");
         std::fs::write(&bad, b"not a glb").expect("write");
         let cli = Cli::try_parse_from(["pipeline".as_ref(), bad.as_os_str()]).expect("args");
-        let rows = run(&cli.args, |_| {}).expect("bench");
+        let rows = run(&cli.args, |_| {}).expect("bench").rows;
         assert_eq!(rows.len(), 1);
         assert_eq!(rows[0].file, "bad.glb");
         assert!(
