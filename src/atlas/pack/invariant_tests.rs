@@ -18,8 +18,10 @@
 //! different charts for intersection exactly as geometry (a separating edge line in `f64`).
 //! Properties, as the module doc of [`super`] states them:
 //! - no texel covered by two charts, and texels of different charts on a page at Chebyshev
-//!   distance `> padding_texels`; every covered texel at least `padding_texels` texels from
-//!   the page edge (`p <= i < W - p`);
+//!   distance `> padding_texels` (`>= padding_texels` where one of the two charts covers no
+//!   texel centre: the packer does not keep the contract's `>` there, see
+//!   [`tiny_charts_keep_the_full_padding`]); every covered texel at least `padding_texels`
+//!   texels from the page edge (`p <= i < W - p`);
 //! - no two triangles of different charts on a page with intersecting interiors;
 //! - every output UV finite and in \[0,1\]; every chart on a page `< num_pages`, one page with
 //!   fit-to-page, `num_pages >= ⌈Σ placed area / page area⌉`;
@@ -621,7 +623,9 @@ fn check(
     }
 
     // Exact: no two triangles of different charts on a page with meeting interiors.
-    let mut tris: Vec<(u32, usize, [[f64; 2]; 3], [f64; 4])> = Vec::new();
+    /// Page, chart, corners and box `[x0, y0, x1, y1]` of a placed triangle, texels.
+    type Placed = (u32, usize, [[f64; 2]; 3], [f64; 4]);
+    let mut tris: Vec<Placed> = Vec::new();
     for (ci, ts) in texel_tris.iter().enumerate() {
         for &t in ts.iter().filter(|&&t| area(t) != 0.0) {
             let bbox = [
