@@ -254,6 +254,10 @@ pub struct QualityJson {
     pub packing_efficiency: f64,
     /// UV area / area of the used UV bounding box.
     pub packing_efficiency_bbox: Option<f64>,
+    /// Σ padded chart area / page area (all pages), in texels: each chart's UV area plus its
+    /// UV boundary length × padding/2 plus π (padding/2)² (the chart grown by half the
+    /// padding); how close the packing came to what the padding allows. `≥ packing_efficiency`.
+    pub packing_bound: f64,
     /// Covered texel centres / all page texels.
     pub texel_utilization: f64,
     /// Overlaps: exact and sampled.
@@ -444,6 +448,7 @@ impl From<&AtlasReport> for QualityJson {
             uv_bbox: r.uv_bbox,
             packing_efficiency: r.packing_efficiency,
             packing_efficiency_bbox: r.packing_efficiency_bbox,
+            packing_bound: r.packing_bound,
             texel_utilization: r.texel_utilization,
             overlap: OverlapJson {
                 exact: ExactOverlapJson {

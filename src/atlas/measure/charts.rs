@@ -31,6 +31,10 @@ pub(super) struct Connectivity {
     pub boundary_length_3d_m: f64,
     /// 3-D length of the boundary half-edges that are open mesh borders.
     pub open_border_length_3d_m: f64,
+    /// Per half-edge `3f + k` (corner `k` to `k + 1` of face `f`): whether no other half-edge
+    /// has its unordered corner-key pair, i.e. it lies on its chart's UV boundary (outer or
+    /// hole).
+    pub uv_boundary: Vec<bool>,
 }
 
 /// Bit pattern with `-0.0` folded onto `0.0`, as a signed integer: position ids are then
@@ -290,5 +294,6 @@ pub(super) fn connectivity(
         seam_length_3d_m: np_sum(&seam_len),
         boundary_length_3d_m: boundary,
         open_border_length_3d_m: open,
+        uv_boundary: uv_edge_unique,
     }
 }

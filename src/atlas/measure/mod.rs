@@ -81,6 +81,16 @@
 //!   share of the page area covered; overlaps count twice); `packing_efficiency_bbox` =
 //!   `uv_area / (num_pages · area of uv_bbox)`, `uv_bbox` the box of the corners of the faces
 //!   whose UVs are all finite, all pages overlaid.
+//! - **Packing bound** = Σ over charts of the *padded chart area* / (`num_pages · W · H`), in
+//!   texels: a chart's padded area is `A + L·r + π·r²` with `r = padding_texels / 2`, `A` its
+//!   UV area in texels² (Σ `|A2|·W·H` over its non-UV-degenerate faces, as `uv_area`) and `L`
+//!   the length in texels (`sqrt((W·Δu)² + (H·Δv)²)`, finite edges only) of its UV boundary:
+//!   the half-edges whose corner-key pair no other half-edge has, holes included. For a convex
+//!   chart this is the area of the chart grown by `r` on every side (Steiner's formula); for
+//!   any other chart it is at least that area. Charts kept about `padding_texels` apart and
+//!   from the page edge have nearly disjoint grown shapes inside the page, so the bound is the
+//!   share of the pages taken by the charts and the padding they need: near 1 when packed as
+//!   tightly as the padding allows. `packing_efficiency ≤ packing_bound`, equal with padding 0.
 //! - **Texel utilisation** = `covered_texels / (num_pages · W · H)`.
 //! - **Range.** A corner is out of range when `u` or `v` is outside `[-1e-6, 1 + 1e-6]` or NaN.
 //! - **Texel density.** Per chart with used area, `d = sqrt(Σ|A2| / ΣA3)` over its used faces
@@ -217,6 +227,9 @@ pub struct AtlasReport {
     pub packing_efficiency: f64,
     /// `uv_area / (num_pages · area of uv_bbox)`; `None` when that area is 0 or undefined.
     pub packing_efficiency_bbox: Option<f64>,
+    /// Σ padded chart area / (`num_pages · W · H`), texels (module doc): how close the packing
+    /// came to what the padding allows; `≥ packing_efficiency`.
+    pub packing_bound: f64,
     /// Texel centres covered by at least one face / (`num_pages · W · H`).
     pub texel_utilization: f64,
     /// Overlaps, exact and sampled.
@@ -416,6 +429,38 @@ fn finite(x: f64) -> Option<f64> {
     x.is_finite().then_some(x)
 }
 
+/// The packing bound of the module doc: `uv_area` (page units², as the efficiency's) and
+/// `num_charts` from the connectivity, `uv_boundary` per half-edge. Sequential sum in
+/// half-edge order (deterministic).
+fn packing_bound(
+    input: &MeasureInput<'_>,
+    uv_boundary: &[bool],
+    uv_area: f64,
+    num_charts: usize,
+) -> f64 {
+    let (w, h) = (
+        f64::from(input.width_texels),
+        f64::from(input.height_texels),
+    );
+    let r_texels = f64::from(input.padding_texels) / 2.0;
+    let mut boundary_texels = 0.0;
+    for (e, _) in uv_boundary.iter().enumerate().filter(|(_, &b)| b) {
+        let uv = &input.corner_uvs[e / 3];
+        let (a, b) = (uv[e % 3], uv[(e + 1) % 3]);
+        let du = w * (f64::from(b[0]) - f64::from(a[0]));
+        let dv = h * (f64::from(b[1]) - f64::from(a[1]));
+        let len = du.hypot(dv);
+        if len.is_finite() {
+            boundary_texels += len;
+        }
+    }
+    let page_texels = f64::from(input.num_pages) * w * h;
+    let padded_texels = uv_area * w * h
+        + boundary_texels * r_texels
+        + num_charts as f64 * std::f64::consts::PI * r_texels * r_texels;
+    padded_texels / page_texels
+}
+
 /// Measures the atlas. Pure and deterministic. Panics on the precondition violations listed on
 /// [`MeasureInput`]. Cost: see the module doc.
 pub fn measure_atlas(input: &MeasureInput<'_>) -> AtlasReport {
@@ -552,6 +597,8 @@ fn measure_without_exact_overlaps(input: &MeasureInput<'_>) -> (AtlasReport, Vec
             report.packing_efficiency_bbox = finite(report.uv_area / (pages * bba));
         }
     }
+
+    report.packing_bound = packing_bound(input, &con.uv_boundary, report.uv_area, con.num_charts);
 
     // Stretch, distortion, density, per-chart values; raster metrics. The two are independent
     // pure functions of the same inputs, run concurrently.

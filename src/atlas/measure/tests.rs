@@ -383,3 +383,82 @@ fn pairwise_sum_matches_numpy() {
     assert_eq!(np_sum(&[1.0, 2.0, 3.0]), 6.0);
     assert_eq!(np_sum(&[]), 0.0);
 }
+
+#[test]
+fn packing_bound_adds_half_the_padding_around_each_chart() {
+    // Two unit squares (separate charts) on a 32 × 16 texel page, each 4 × 4 texels: UV
+    // 4/32 wide and 4/16 high. With padding 2 (r = 1 texel) each padded square is
+    // 16 + 16·1 + π texels² (area, perimeter × r, the four quarter discs at the corners):
+    // bound = 2 (32 + π) / 512; efficiency = 32 / 512.
+    let mut pos = SQUARE.to_vec();
+    pos.extend(SQUARE.iter().map(|p| [p[0] + 2.0, p[1], p[2]]));
+    let tris: Vec<[u32; 3]> = SQUARE_TRIS
+        .iter()
+        .copied()
+        .chain(SQUARE_TRIS.iter().map(|t| t.map(|v| v + 4)))
+        .collect();
+    let s = [4.0 / 32.0, 4.0 / 16.0];
+    let mut uvs = square_uvs([2.0 / 32.0, 2.0 / 16.0], s);
+    uvs.extend(square_uvs([20.0 / 32.0, 8.0 / 16.0], s));
+    let c = case(&pos, &tris, &uvs);
+    let r = measure(&c, [32, 16], 2, 1);
+    assert_eq!(r.charts, 2);
+    assert_eq!(r.packing_efficiency, 32.0 / 512.0);
+    let want = 2.0 * (32.0 + std::f64::consts::PI) / 512.0;
+    assert!(
+        close(Some(r.packing_bound), want),
+        "{} vs {want}",
+        r.packing_bound
+    );
+    // Padding 0: the bound is the efficiency. Padding 4 (r = 2): 16 + 16·2 + 4π per square.
+    assert_eq!(measure(&c, [32, 16], 0, 1).packing_bound, 32.0 / 512.0);
+    let want4 = 2.0 * (48.0 + 4.0 * std::f64::consts::PI) / 512.0;
+    assert!(close(
+        Some(measure(&c, [32, 16], 4, 1).packing_bound),
+        want4
+    ));
+    // On two pages the page area doubles.
+    let mut c2 = c;
+    c2.pages = vec![0, 0, 1, 1];
+    assert!(close(
+        Some(measure(&c2, [32, 16], 2, 2).packing_bound),
+        want / 2.0
+    ));
+}
+
+#[test]
+fn packing_bound_counts_the_boundary_of_a_hole() {
+    // A 3 × 3 grid of unit cells without its centre cell: one chart, a square ring. On a
+    // 16 × 16 page at 1 texel per unit: area 8 texels², boundary 12 (outside) + 4 (hole)
+    // texels; padding 2 (r = 1): 8 + 16 + π.
+    let pos: Vec<[f64; 3]> = (0..4)
+        .flat_map(|j| (0..4).map(move |i| [f64::from(i), f64::from(j), 0.0]))
+        .collect();
+    let id = |i: u32, j: u32| j * 4 + i;
+    let tris: Vec<[u32; 3]> = (0..3)
+        .flat_map(|j| (0..3).map(move |i| (i, j)))
+        .filter(|&(i, j)| (i, j) != (1, 1))
+        .flat_map(|(i, j)| {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            [[a, b, c], [a, c, d]]
+        })
+        .collect();
+    let uvs: Vec<[[f32; 2]; 3]> = tris
+        .iter()
+        .map(|t| {
+            t.map(|v| {
+                let p = pos[v as usize];
+                [(2.0 + p[0] as f32) / 16.0, (2.0 + p[1] as f32) / 16.0]
+            })
+        })
+        .collect();
+    let c = case(&pos, &tris, &uvs);
+    let r = measure(&c, [16, 16], 2, 1);
+    assert_eq!(r.charts, 1);
+    let want = (8.0 + 16.0 + std::f64::consts::PI) / 256.0;
+    assert!(
+        close(Some(r.packing_bound), want),
+        "{} vs {want}",
+        r.packing_bound
+    );
+}

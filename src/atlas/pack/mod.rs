@@ -54,6 +54,8 @@ pub mod raster;
 pub mod test_charts;
 
 #[cfg(test)]
+mod invariant_tests;
+#[cfg(test)]
 mod tests;
 
 use std::ops::ControlFlow;
