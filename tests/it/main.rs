@@ -19,6 +19,7 @@ mod gltf_roundtrip;
 mod http_crash;
 mod http_service;
 mod mesh_api;
+mod pack_box;
 mod param_oracles;
 mod pipeline;
 

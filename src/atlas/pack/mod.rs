@@ -1,7 +1,9 @@
 //! Packing: place flattened charts on texture pages.
 //!
 //! Purpose: the third stage of the atlas pipeline. [`pack_charts`] scales every chart to one
-//! texel density, turns it, and places it with the horizon ("Tetris") packer of lscm-2002 §4,
+//! texel density, turns it (a nearly rectangular chart, [`place::RECTANGULAR_FILL`], to its
+//! minimum-area enclosing rectangle, axis-aligned, trying only its quarter turns; any other
+//! chart to its diameter, trying the angles of [`chart_rotations`]), and places it with the horizon ("Tetris") packer of lscm-2002 §4,
 //! extended as isocharts-2004 §6 (insertion from four directions, 16 rotations), then writes
 //! normalized page UVs. Where the horizons leave much of the page empty (fit-to-page
 //! efficiency below [`HOLE_FILL_BELOW`], or a fixed density needing more than one page), the
@@ -36,9 +38,9 @@
 //! are in texels (`_texels`); densities in texels per model unit.
 //!
 //! Code map: `types.rs` (options, input chart, packing, errors), [`raster`] (centre-sampled and
-//! conservative footprints, Chebyshev dilation), [`place`] (density, diameter orientation,
-//! rotations, per-line footprint extents, footprint bits), `hull.rs` (convex hull and
-//! diameter), [`outline`] (boundary chain and outline triangles of a chart), [`horizon`] (the
+//! conservative footprints, Chebyshev dilation), [`place`] (density, base orientation,
+//! rotations, per-line footprint extents, footprint bits), `hull.rs` (convex hull, diameter,
+//! minimum-area rectangle), [`outline`] (boundary chain and outline triangles of a chart), [`horizon`] (the
 //! four-direction horizon packer, one page), [`hole`] (the occupancy of a page and the search
 //! inside its box), [`placement`] (the position both searches return), this file (the
 //! fit-to-page density search, output).
@@ -110,6 +112,30 @@ pub fn hole_rotations(rotations: u32) -> u32 {
     let more = rotations + rotations / 2;
     if rotations % 8 == 0 && more <= MAX_ROTATIONS {
         more
+    } else {
+        rotations
+    }
+}
+
+/// The rotations a chart tries in one packing, for `rotations` asked: the quarter turns of
+/// its axis-aligned base orientation for a [`place::PreparedChart::rectangular`] chart (when
+/// `rotations` is a multiple of 4, and not in a `scored` hole-filling packing, where a
+/// rectangle turned to fit a gap between many charts pays); the quarter turns of the diameter-vertical orientation
+/// for a chart below [`SMALL_CHART_TEXELS`] at `texels_per_unit` (same condition, and not when
+/// filling `holes`); [`hole_rotations`] in a `scored` hole-filling packing; else `rotations`.
+pub fn chart_rotations(
+    prep: &place::PreparedChart,
+    texels_per_unit: f64,
+    rotations: u32,
+    holes: bool,
+    scored: bool,
+) -> u32 {
+    let texels = prep.area_m2 * texels_per_unit * texels_per_unit;
+    let small = texels < SMALL_CHART_TEXELS && !holes;
+    if rotations % 4 == 0 && ((prep.rectangular && !scored) || small) {
+        rotations.min(4)
+    } else if scored {
+        hole_rotations(rotations)
     } else {
         rotations
     }
@@ -474,18 +500,13 @@ impl Context<'_, '_> {
                 batch = self.order[n..end]
                     .par_iter()
                     .map(|&j| {
-                        // Small charts: the quarter turns only (a subset of the angles), except
-                        // when filling holes, where every angle is tried
-                        // ([`SMALL_CHART_TEXELS`]).
-                        let texels = prepared[j].area_m2 * texels_per_unit * texels_per_unit;
-                        let rotations =
-                            if texels < SMALL_CHART_TEXELS && o.rotations % 4 == 0 && !holes {
-                                o.rotations.min(4)
-                            } else if scored {
-                                hole_rotations(o.rotations)
-                            } else {
-                                o.rotations
-                            };
+                        let rotations = chart_rotations(
+                            &prepared[j],
+                            texels_per_unit,
+                            o.rotations,
+                            holes,
+                            scored,
+                        );
                         place::orientations(
                             &self.charts[j],
                             &prepared[j],

@@ -1,4 +1,4 @@
-//! Chart placement geometry: uniform texel density, diameter orientation, rotations, footprints.
+//! Chart placement geometry: uniform texel density, base orientation, rotations, footprints.
 //!
 //! Purpose: turn one input chart into the candidate *orientations* the horizon packer chooses
 //! from. Each orientation is an affine map from the chart's UVs (model units) to local texel
@@ -15,7 +15,11 @@
 //!   texels_per_unit²` texels² for every chart (rotations preserve it).
 //! - Orientation (lscm-2002 §4 step 2): the chart's maximum diameter (the farthest pair of its
 //!   convex hull, rotating calipers) is turned vertical; then `rotations` angles evenly spaced
-//!   over a full turn are tried (isocharts-2004 §6: 16). When `rotations` is a multiple of 4,
+//!   over a full turn are tried (isocharts-2004 §6: 16). A chart that fills at least
+//!   [`RECTANGULAR_FILL`] of its minimum-area enclosing rectangle (rotating calipers over the
+//!   hull edges, as xatlas and Blender orient charts) is turned so that this rectangle is
+//!   axis-aligned, longer side vertical, instead: a quad lands with its sides along the page
+//!   axes (the contact-scored hole search keeps the diameter's angles for every chart). When `rotations` is a multiple of 4,
 //!   only the first quarter is rasterized: a quarter turn maps the texel grid onto itself, so
 //!   the other footprints are the same extents re-indexed (exact, no re-rasterization).
 //! - Layout: the chart is centred in its texel span (a margin of [`LAYOUT_EPS_TEXELS`] from
@@ -32,7 +36,7 @@
 //! Cost: per orientation rasterized, O(boundary edges × rows per edge, plus loose triangles ×
 //! rows, plus D texels / 64 × padding); orientations wider or taller than the page are not
 //! rasterized (bounded memory whatever the trial density).
-use super::hull::{convex_hull, diameter};
+use super::hull::{convex_hull, diameter, min_area_box};
 use super::outline::{boundary_chain, outline_triangles};
 use super::raster::{
     fill_chain, rasterize_centres, rasterize_conservative, rasterize_touching, Mask,
@@ -46,6 +50,14 @@ pub const LAYOUT_EPS_TEXELS: f64 = 1e-3;
 /// `f32` rounding of written UVs (2⁻²⁴ × page side ≤ 10⁻³ texels for pages ≤ 16384).
 pub const CENTRE_GROW_TEXELS: f64 = 0.01;
 
+/// A chart whose UV area is at least this fraction of its minimum-area enclosing rectangle is
+/// *rectangular* ([`PreparedChart::rectangular`]): it is turned axis-aligned and tries only the
+/// quarter turns. Trade-off: for such charts the other angles only grow the padded box (a
+/// rectangle's least box is its own), while each costs a footprint and a search; charts that
+/// fill their box less (L shapes, discs) keep every angle, since a turned bay can take a
+/// neighbour.
+pub const RECTANGULAR_FILL: f64 = 0.95;
+
 /// Empty line of an extents array.
 pub const EMPTY: (i32, i32) = (i32::MAX, i32::MIN);
 
@@ -57,8 +69,18 @@ pub struct PreparedChart {
     /// Texels per model UV unit at density 1 (`sqrt(area_m2 / uv_area)`); 0 for a degenerate
     /// chart.
     pub unit_scale: f64,
-    /// Rotation that turns the maximum diameter vertical, radians.
+    /// The chart's base orientation, radians: the rotation that turns its minimum-area
+    /// enclosing rectangle axis-aligned (longer side vertical) for a [`Self::rectangular`]
+    /// chart, else the one that turns its maximum diameter vertical.
     pub base_angle_rad: f64,
+    /// The rotation that turns the maximum diameter vertical, radians (`base_angle_rad` of a
+    /// chart that is not rectangular); the base of every chart in the contact-scored hole
+    /// search ([`orientations`] with `padded_bits`).
+    pub diameter_angle_rad: f64,
+    /// Whether the chart fills at least [`RECTANGULAR_FILL`] of its minimum-area enclosing
+    /// rectangle: then only the quarter turns of its axis-aligned base orientation are tried
+    /// (the packer's callers, [`super::chart_rotations`]).
+    pub rectangular: bool,
     /// The 3-D area (sort key and area accounting), model units².
     pub area_m2: f64,
     /// False for a chart without vertices (nothing to place).
@@ -127,6 +149,8 @@ pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChar
     // UV area in coordinates normalized by the extent, so that finite inputs never overflow.
     let mut unit_scale = 0.0;
     let mut base_angle_rad = 0.0;
+    let mut rectangular = false;
+    let mut diameter_angle_rad = 0.0;
     if extent > 0.0 && extent.is_finite() {
         let norm = |p: [f64; 2]| [(p[0] - centre[0]) / extent, (p[1] - centre[1]) / extent];
         let uv_area_normalized: f64 = chart
@@ -146,6 +170,21 @@ pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChar
                 let (a, b) = diameter(&hull);
                 let v = [hull[b][0] - hull[a][0], hull[b][1] - hull[a][1]];
                 base_angle_rad = std::f64::consts::FRAC_PI_2 - v[1].atan2(v[0]);
+                diameter_angle_rad = base_angle_rad;
+                if let Some(mbox) = min_area_box(&hull) {
+                    let box_area = mbox.along * mbox.across;
+                    if box_area > 0.0 && uv_area_normalized >= RECTANGULAR_FILL * box_area {
+                        rectangular = true;
+                        // The edge direction horizontal, then a quarter turn when the box is
+                        // longer along it (longer side vertical, as the diameter otherwise).
+                        let theta = mbox.dir[1].atan2(mbox.dir[0]);
+                        base_angle_rad = if mbox.along > mbox.across {
+                            std::f64::consts::FRAC_PI_2 - theta
+                        } else {
+                            -theta
+                        };
+                    }
+                }
             }
         }
     }
@@ -154,6 +193,8 @@ pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChar
         centre,
         unit_scale,
         base_angle_rad,
+        diameter_angle_rad,
+        rectangular,
         area_m2: if unit_scale > 0.0 { chart.area_m2 } else { 0.0 },
         has_vertices: !chart.uv.is_empty(),
         outline: outline_triangles(chart.uv, chart.triangles),
@@ -354,7 +395,10 @@ impl Orientation {
 }
 
 /// The `rotations` orientations of a chart at `texels_per_unit`, for a page of `page_texels`
-/// with `padding_texels`. Angle `k` is `base_angle_rad + 2πk / rotations`. With
+/// with `padding_texels`. Angle `k` is `base + 2πk / rotations`, with `base` the chart's
+/// [`PreparedChart::base_angle_rad`], or its [`PreparedChart::diameter_angle_rad`] with
+/// `padded_bits` (the contact-scored hole search, whose many-chart packings were tuned on the
+/// diameter's angles). With
 /// `padded_bits`, each rasterized orientation also keeps the texels of `D`
 /// ([`Orientation::dilated_bits`], one more dilation of the mask); only the hole search of
 /// [`super::hole`] reads them, and only when it scores candidates
@@ -372,10 +416,14 @@ pub fn orientations(
     let rotations = rotations.max(1) as usize;
     let quarter = rotations % 4 == 0 && prep.unit_scale > 0.0;
     let direct = if quarter { rotations / 4 } else { rotations };
+    let base = if padded_bits {
+        prep.diameter_angle_rad
+    } else {
+        prep.base_angle_rad
+    };
     let mut out: Vec<Orientation> = (0..direct)
         .map(|k| {
-            let angle =
-                prep.base_angle_rad + 2.0 * std::f64::consts::PI * k as f64 / rotations as f64;
+            let angle = base + 2.0 * std::f64::consts::PI * k as f64 / rotations as f64;
             orient(
                 chart,
                 prep,
@@ -394,8 +442,7 @@ pub fn orientations(
                 prev.rotate90()
             } else {
                 // Not rasterized (too large in that orientation): do the turned one directly.
-                let angle =
-                    prep.base_angle_rad + 2.0 * std::f64::consts::PI * k as f64 / rotations as f64;
+                let angle = base + 2.0 * std::f64::consts::PI * k as f64 / rotations as f64;
                 orient(
                     chart,
                     prep,

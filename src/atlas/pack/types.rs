@@ -24,7 +24,9 @@ pub struct PackOptions {
     /// Texel density. Default [`TexelDensity::FitToPage`].
     pub density: TexelDensity,
     /// Rotations tried per chart, evenly spaced over a full turn after orienting the chart's
-    /// maximum diameter vertically; `1` means the diameter-vertical orientation only. `>= 1`.
+    /// maximum diameter vertically (a nearly rectangular chart: its minimum-area rectangle
+    /// axis-aligned, and at most the 4 quarter turns, see
+    /// [`chart_rotations`](super::chart_rotations)); `1` means the base orientation only. `>= 1`.
     /// Default 16 (isocharts-2004 §6). Charts smaller than
     /// [`SMALL_CHART_TEXELS`](super::SMALL_CHART_TEXELS) try at most the 4 quarter turns when
     /// this is a multiple of 4, except when the charts are packed again with hole filling
