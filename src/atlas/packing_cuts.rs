@@ -21,6 +21,10 @@ const PACKING_CUT_BELOW: f64 = 0.61;
 /// most this many charts: it doubles the seams, which pays on a tube of 4 strips, not on 20
 /// charts of a scan.
 const PACKING_CUT_ALL_MAX_CHARTS: usize = 8;
+/// Levels of the last resort of `cut_for_packing`: every chart cut at once, then every piece
+/// again. Trade-off: a level costs one validation and packing of the mesh, paid only on the
+/// few-chart atlases below [`PACKING_CUT_BELOW`] whose single cuts did not pay.
+const PACKING_CUT_ALL_LEVELS: usize = 2;
 /// ... and only on atlases of at most this many packed charts: with many charts the shapes
 /// average out and a cut would not pay for its re-validation and re-packing.
 const PACKING_CUT_MAX_CHARTS: usize = 32;
@@ -42,7 +46,7 @@ const PACKING_CUT_MAX_TRIES: usize = 4;
 /// over the page area: the packer places each chart at exactly that UV area) rises by at least
 /// [`PACKING_CUT_MIN_GAIN`]; otherwise the next largest chart is tried, up to
 /// [`PACKING_CUT_MAX_TRIES`] tries; when no single cut paid and there are at most
-/// [`PACKING_CUT_ALL_MAX_CHARTS`] charts, every chart is cut at once, one last try. Only with [`TexelDensity::FitToPage`] (an explicit density
+/// [`PACKING_CUT_ALL_MAX_CHARTS`] charts, every chart is cut at once (then every piece again, up to [`PACKING_CUT_ALL_LEVELS`] levels), the last tries. Only with [`TexelDensity::FitToPage`] (an explicit density
 /// does not change with the cut). Deterministic (every step is). Returns the charts to use and the
 /// number of cuts kept.
 pub(super) fn cut_for_packing(
@@ -145,20 +149,33 @@ pub(super) fn cut_for_packing(
         }
     }
     // No single cut paid (e.g. a tube in four equal strips, where cutting one strip leaves an
-    // irregular set): one last try cuts every chart of at least 2 faces at once.
+    // irregular set): the last tries cut every chart of at least 2 faces at once, and when that
+    // does not pay either, every piece once more, up to `PACKING_CUT_ALL_LEVELS` levels (a 2:1
+    // rectangle cut into two squares packs no better on a square page; its quarters do).
     if cuts == 0 && best < PACKING_CUT_BELOW && n <= PACKING_CUT_ALL_MAX_CHARTS {
-        let charts = &current.segmentation.charts;
-        let picks: Vec<usize> = (0..charts.len())
-            .filter(|&i| charts[i].len() >= 2)
-            .collect();
-        if !picks.is_empty() {
-            let candidate = cut(&current, &picks)?;
+        let mut level: Option<(parameterize::ParameterizedCharts, usize)> = None;
+        for _ in 0..PACKING_CUT_ALL_LEVELS {
+            let (base, cut_before) = match &level {
+                Some((l, c)) => (l, *c),
+                None => (&current, 0),
+            };
+            let charts = &base.segmentation.charts;
+            let picks: Vec<usize> = (0..charts.len())
+                .filter(|&i| charts[i].len() >= 2)
+                .collect();
+            if picks.is_empty() {
+                break;
+            }
+            let candidate = cut(base, &picks)?;
             let (eff, _, packing) = estimate(&candidate)?;
+            let cut_now = cut_before + picks.len();
             if eff >= best + PACKING_CUT_MIN_GAIN {
-                cuts = picks.len();
+                cuts = cut_now;
                 best_packing = packing;
                 current = candidate;
+                break;
             }
+            level = Some((candidate, cut_now));
         }
     }
     Ok((current, cuts, best_packing))
