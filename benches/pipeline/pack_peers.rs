@@ -243,13 +243,14 @@ fn run_script(
                 config.timeout.as_secs_f64()
             );
         }
-        bail!(
-            "{} (needs `pip install xatlas uvunwrap numpy`)",
-            stderr
-                .lines()
-                .rfind(|l| !l.trim().is_empty())
-                .unwrap_or("pack_peers.py failed")
-        );
+        let last = stderr
+            .lines()
+            .rfind(|l| !l.trim().is_empty())
+            .unwrap_or("pack_peers.py failed");
+        if stderr.contains("ModuleNotFoundError") {
+            bail!("{last} (needs `pip install xatlas uvunwrap numpy`, and --eval-dir at ../shared/eval)");
+        }
+        bail!("{last}");
     }
     serde_json::from_slice(&o.stdout).context("pack_peers.py's output is not its JSON")
 }
