@@ -527,19 +527,39 @@ fn run_peer(tool: &str, file: &Path, out: &Path, config: &BenchConfig) -> Pipeli
 }
 
 fn run_eval(out: &Path, config: &BenchConfig) -> anyhow::Result<Quality> {
-    let o = Command::new("python3")
-        .arg(config.eval_dir.join("atlas_eval.py"))
-        .arg(out)
-        .args(["--resolution", &config.resolution.to_string()])
-        .args(["--padding", &config.padding.to_string()])
+    let v = evaluator_json(
+        &config.eval_dir,
+        out,
+        None,
+        config.resolution,
+        config.padding,
+    )?;
+    Quality::from_eval(&v).context("the evaluator's JSON lacks a quality key")
+}
+
+/// `atlas_eval.py GLB [--input INPUT] --resolution R --padding P --json` of `eval_dir`, parsed.
+fn evaluator_json(
+    eval_dir: &Path,
+    glb: &Path,
+    input: Option<&Path>,
+    resolution: u32,
+    padding: u32,
+) -> anyhow::Result<serde_json::Value> {
+    let mut cmd = Command::new("python3");
+    cmd.arg(eval_dir.join("atlas_eval.py")).arg(glb);
+    if let Some(input) = input {
+        cmd.arg("--input").arg(input);
+    }
+    let o = cmd
+        .args(["--resolution", &resolution.to_string()])
+        .args(["--padding", &padding.to_string()])
         .arg("--json")
         .output()
         .context("running python3 atlas_eval.py")?;
     if !o.status.success() {
         bail!("{}", String::from_utf8_lossy(&o.stderr).trim());
     }
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout)?;
-    Quality::from_eval(&v).context("the evaluator's JSON lacks a quality key")
+    Ok(serde_json::from_slice(&o.stdout)?)
 }
 
 /// The table: one line per tool and file, then the time ratios per file.

@@ -256,20 +256,13 @@ fn run_script(
 }
 
 fn run_eval(glb: &Path, input: &Path, config: &PackPeersConfig) -> anyhow::Result<PackEval> {
-    let o = Command::new("python3")
-        .arg(config.eval_dir.join("atlas_eval.py"))
-        .arg(glb)
-        .arg("--input")
-        .arg(input)
-        .args(["--resolution", &config.resolution.to_string()])
-        .args(["--padding", &config.padding.to_string()])
-        .arg("--json")
-        .output()
-        .context("running python3 atlas_eval.py")?;
-    if !o.status.success() {
-        bail!("{}", String::from_utf8_lossy(&o.stderr).trim());
-    }
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout)?;
+    let v = super::evaluator_json(
+        &config.eval_dir,
+        glb,
+        Some(input),
+        config.resolution,
+        config.padding,
+    )?;
     PackEval::from_eval(&v).context("the evaluator's JSON lacks a key of the pack table")
 }
 
