@@ -20,9 +20,11 @@
 //! References: Shewchuk, "An Introduction to the Conjugate Gradient Method Without the Agonizing
 //! Pain" (1994), §B3 (preconditioned CG); faer 0.24 `sparse::linalg::cholesky`.
 pub mod cg;
+pub mod max_flow;
 pub mod sparse;
 pub mod sparse_cholesky;
 
+pub use max_flow::{CutSide, FlowGraph, MinCut};
 pub use cg::{
     solve_cg, solve_pcg, CgOptions, CgOutcome, CgStep, Jacobi, LinearOperator, Preconditioner,
 };
