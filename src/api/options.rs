@@ -119,6 +119,14 @@ pub struct OptionsJson {
     /// Fraction of edges kept as feature candidates, (0, 1], default 0.05.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub feature_fraction: Option<f64>,
+    /// Graph-cut border optimisation: the band around each border between two charts takes up
+    /// to this fraction of each chart's area, (0, 1), e.g. 0.3. Absent or `null`: borders as grown.
+    #[serde(
+        default,
+        deserialize_with = "explicit_null",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub border_band_fraction: Option<Option<f64>>,
     /// Dihedral angle in degrees, (0, 180], from which an edge is a hard edge, a feature on
     /// components where the paper's feature curves find none. Absent: 60; `null`: no hard edges.
     #[serde(
@@ -194,6 +202,9 @@ impl OptionsJson {
         if let Some(f) = self.feature_fraction {
             atlas.segment.lscm.feature_fraction = f;
         }
+        if let Some(f) = self.border_band_fraction {
+            atlas.segment.border_band_fraction = f;
+        }
         if let Some(a) = self.hard_edge_angle_deg {
             if let Some(deg) = a.filter(|d| !(*d > 0.0 && *d <= 180.0)) {
                 return Err(AtlasError::InvalidOption {
@@ -247,6 +258,7 @@ impl OptionsJson {
             merge_passes: Some(a.parameterize.merge_passes),
             merge_max_chart_fraction: Some(a.parameterize.merge_max_chart_fraction),
             feature_fraction: Some(a.segment.lscm.feature_fraction),
+            border_band_fraction: Some(a.segment.border_band_fraction),
             // Rounded to 1e-9° so that 60 reads back as 60, not 59.99999999999999.
             hard_edge_angle_deg: Some(
                 a.segment
@@ -288,7 +300,7 @@ mod tests {
     fn every_field_maps_and_round_trips() {
         let text = r#"{"resolution":[2048,512],"padding_texels":4,"texels_per_unit":300.5,
             "rotations":4,"max_charts":12,"max_stretch":1.2,"max_area_ratio":3.0,"merge_passes":2,
-            "merge_max_chart_fraction":0.25,"feature_fraction":0.1,
+            "merge_max_chart_fraction":0.25,"feature_fraction":0.1,"border_band_fraction":0.2,
             "hard_edge_angle_deg":45.5,"solver":"hierarchical","uv_set":2,"output_format":"gltf"}"#;
         let o: OptionsJson = serde_json::from_str(text).unwrap();
         let s = o.to_settings().unwrap();
@@ -305,6 +317,7 @@ mod tests {
         assert_eq!(s.atlas.parameterize.merge_passes, 2);
         assert_eq!(s.atlas.parameterize.merge_max_chart_fraction, Some(0.25));
         assert_eq!(s.atlas.segment.lscm.feature_fraction, 0.1);
+        assert_eq!(s.atlas.segment.border_band_fraction, Some(0.2));
         assert_eq!(
             s.atlas.segment.lscm.hard_edge_angle_rad,
             Some(45.5f64.to_radians())

@@ -79,6 +79,11 @@ pub struct OptionFlags {
     /// Fraction of edges kept as feature candidates, (0, 1]. Default 0.05.
     #[arg(long)]
     pub feature_fraction: Option<f64>,
+    /// Graph-cut border optimisation: the band around each border between two charts takes up
+    /// to this fraction of each chart's area, (0, 1), e.g. 0.3, or `none` to keep the borders
+    /// as grown. Default none.
+    #[arg(long, value_parser = parse_fraction)]
+    pub border_band_fraction: Option<OrNone>,
     /// Dihedral angle in degrees, (0, 180], from which an edge is a hard edge (a feature on
     /// parts where the paper's feature curves find none, e.g. low-poly boxes), or `none`.
     /// Default 60.
@@ -110,6 +115,7 @@ impl OptionFlags {
             merge_passes: self.merge_passes,
             merge_max_chart_fraction: self.merge_max_chart_fraction.map(|b| b.0),
             feature_fraction: self.feature_fraction,
+            border_band_fraction: self.border_band_fraction.map(|b| b.0),
             hard_edge_angle_deg: self.hard_edge_angle_deg.map(|b| b.0),
             solver: self.solver,
             uv_set: self.uv_set,

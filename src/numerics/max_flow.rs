@@ -101,7 +101,10 @@ impl FlowGraph {
     /// edge has both equal). Panics on a negative capacity or an out-of-range node (caller bugs).
     pub fn add_edge(&mut self, u: usize, v: usize, cap_uv: i64, cap_vu: i64) {
         assert!(cap_uv >= 0 && cap_vu >= 0, "capacities are non-negative");
-        assert!(u < self.num_nodes() && v < self.num_nodes(), "node out of range");
+        assert!(
+            u < self.num_nodes() && v < self.num_nodes(),
+            "node out of range"
+        );
         let a = self.head.len() as u32;
         self.head.push(v as u32);
         self.cap.push(cap_uv);

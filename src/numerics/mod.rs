@@ -24,9 +24,9 @@ pub mod max_flow;
 pub mod sparse;
 pub mod sparse_cholesky;
 
-pub use max_flow::{CutSide, FlowGraph, MinCut};
 pub use cg::{
     solve_cg, solve_pcg, CgOptions, CgOutcome, CgStep, Jacobi, LinearOperator, Preconditioner,
 };
+pub use max_flow::{CutSide, FlowGraph, MinCut};
 pub use sparse::{CsrMatrix, SparseError, Triplet};
 pub use sparse_cholesky::{CholeskyError, HermitianCholesky, SparseCholesky};

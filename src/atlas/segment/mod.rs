@@ -30,13 +30,16 @@
 //! reporting never changes the charts.
 //!
 //! Code map: [`options`] (every option, unit, default), [`features`] (§3.1, Algorithm 1),
-//! [`grow`] (§3.2, Algorithm 2), this file (the disk guarantee and the chart-count cap). The
+//! [`grow`] (§3.2, Algorithm 2), this file (the disk guarantee and the chart-count cap),
+//! [`graph_cut`] (opt-in: borders moved to a minimum cut, Iso-charts §5.2, between the disk
+//! guarantee and the cap; it keeps every chart a disk and the count unchanged). The
 //! next stage, `parameterize`, flattens the charts, splits the invalid ones and merges back
 //! (§3.3).
 //!
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.
 pub mod features;
+pub mod graph_cut;
 pub mod grow;
 pub mod options;
 
@@ -147,6 +150,8 @@ pub struct SegmentStats {
     pub disk_splits: usize,
     /// Merges made to respect [`SegmentOptions::max_charts`].
     pub cap_merges: usize,
+    /// Pairs of adjacent charts whose border the graph cut moved (`graph_cut.rs`).
+    pub borders_moved: usize,
     /// `maxdist`, the largest distance to features, model units.
     pub max_distance_m: f64,
 }
@@ -194,6 +199,7 @@ pub fn segment_charts(
     let total = PHASES * nf;
     checkpoint(progress.advance(0, total))?;
     let mut stats = SegmentStats::default();
+    let features: Option<Features>;
     let proposed = match options.method {
         SegmentMethod::Lscm2002 => {
             let feats = detect_features(mesh, &options.lscm, &mut progress.part(0, nf, total))?;
@@ -208,6 +214,7 @@ pub fn segment_charts(
             stats.seeds = grown.num_seeds;
             stats.grown_charts = grown.num_charts;
             stats.max_distance_m = grown.max_distance_m;
+            features = Some(feats);
             grown.face_chart
         }
     };
@@ -236,6 +243,11 @@ pub fn segment_charts(
             in_batch = 0;
             checkpoint(disks.advance(faces_done, nf))?;
         }
+    }
+    if let Some(band_fraction) = options.border_band_fraction {
+        let moved =
+            graph_cut::optimize_borders(mesh, &mut charts, features.as_ref(), band_fraction);
+        stats.borders_moved = moved.moved;
     }
     if let Some(cap) = options.max_charts {
         stats.cap_merges = merge_to_cap(
@@ -342,9 +354,26 @@ fn disk_check_connected(
     let glued_inside = |h: HalfedgeId| mesh.opposite(h).filter(|o| inside(o.face()));
     // One fan per vertex: count the outgoing half-edges that start a run of chart faces in the
     // rotation (their predecessor, across `g`'s own edge, is outside or absent).
-    let mut vertices: Vec<VertexId> = faces.iter().flat_map(|&f| mesh.face_vertices(f)).collect();
-    vertices.sort_unstable();
-    vertices.dedup();
+    // The chart's vertices, ascending. A large chart (at least 1/16 of the mesh) dedups with a
+    // flag per mesh vertex and sorts only the distinct ones (about a sixth of the corners).
+    let mut vertices: Vec<VertexId>;
+    if faces.len().saturating_mul(16) >= mesh.num_faces() {
+        let mut seen = vec![false; mesh.num_vertices()];
+        vertices = Vec::with_capacity(faces.len());
+        for &f in faces {
+            for v in mesh.face_vertices(f) {
+                if !seen[v.index()] {
+                    seen[v.index()] = true;
+                    vertices.push(v);
+                }
+            }
+        }
+        vertices.sort_unstable();
+    } else {
+        vertices = faces.iter().flat_map(|&f| mesh.face_vertices(f)).collect();
+        vertices.sort_unstable();
+        vertices.dedup();
+    }
     for &v in &vertices {
         let starts = mesh
             .outgoing_halfedges(v)

@@ -417,6 +417,20 @@ fn invalid_options_are_rejected_with_the_option_name() {
         ),
         (
             SegmentOptions {
+                border_band_fraction: Some(1.0),
+                ..Default::default()
+            },
+            "border_band_fraction",
+        ),
+        (
+            SegmentOptions {
+                border_band_fraction: Some(f64::NAN),
+                ..Default::default()
+            },
+            "border_band_fraction",
+        ),
+        (
+            SegmentOptions {
                 lscm: Lscm2002Options {
                     feature_fraction: 0.0,
                     ..Default::default()
