@@ -7,6 +7,7 @@
 //! are of the mesh's face count, counts are counts.
 use super::FlattenOptions;
 use super::ParameterizeChartsError;
+use super::StretchOptimization;
 
 /// Options of [`parameterize_charts`](super::parameterize_charts).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -46,6 +47,16 @@ pub struct ParameterizeOptions {
     pub merge_max_chart_fraction: Option<f64>,
     /// How each chart is flattened. Default [`FlattenOptions::default`].
     pub flatten: FlattenOptions,
+    /// The stretch optimisation of every valid chart's map, run last (`super::stretch`, Sander
+    /// et al. 2001: L∞ then L2). Default [`StretchOptimization::None`] (see its doc: it does not
+    /// pay yet).
+    pub stretch_optimization: StretchOptimization,
+    /// Passes of each phase of the stretch optimisation (L∞, then L2), at most; a phase stops
+    /// early after a pass without a move. A count in `1..=64` (use
+    /// [`StretchOptimization::None`] for none). Default 4. Trade-off: each pass visits every
+    /// vertex of every chart once (the L∞ phase only those near the chart's maximum); later
+    /// passes gain less.
+    pub stretch_passes: u32,
 }
 
 /// Meshes with more faces than this get only the first merge pass
@@ -66,6 +77,8 @@ impl Default for ParameterizeOptions {
             merge_passes: 3,
             merge_max_chart_fraction: Some(0.10),
             flatten: FlattenOptions::default(),
+            stretch_optimization: StretchOptimization::None,
+            stretch_passes: 4,
         }
     }
 }
@@ -108,6 +121,15 @@ impl ParameterizeOptions {
                     detail: format!("{r} is not a finite ratio >= 1; use e.g. 1.1, or None"),
                 });
             }
+        }
+        if !(1..=64).contains(&self.stretch_passes) {
+            return Err(ParameterizeChartsError::InvalidOption {
+                option: "stretch_passes",
+                detail: format!(
+                    "{} is not a pass count in 1..=64; use e.g. 4, or stretch_optimization none",
+                    self.stretch_passes
+                ),
+            });
         }
         if let Some(f) = self.merge_max_chart_fraction {
             if !(f > 0.0 && f <= 1.0) {

@@ -45,6 +45,7 @@ use super::degenerate::{flatten_around_degenerate, line_map, split_off_degenerat
 use super::merge::merge_back;
 use super::schedule::in_parallel_largest_first;
 use super::split::split_for;
+use super::stretch::{optimize_stretch_charts, StretchStats};
 use super::warm_start::restrict_map;
 use super::{LocatedMap, ParameterizeChartsError, ParameterizeOptions};
 use crate::atlas::progress::StageProgress;
@@ -76,6 +77,8 @@ pub struct ParameterizedCharts {
     pub degenerate_faces: usize,
     /// Small charts merged back into a neighbour after splitting.
     pub merges: usize,
+    /// What the stretch optimisation of the final maps did (`super::stretch`).
+    pub stretch: StretchStats,
 }
 
 /// The parameterize stage: flattens every chart of `seg`, splits invalid ones until all are
@@ -187,7 +190,7 @@ pub fn parameterize_charts(
         .faces()
         .filter(|&f| mesh.face_degeneracy(f).is_some())
         .count();
-    Ok(ParameterizedCharts {
+    let mut result = ParameterizedCharts {
         segmentation,
         maps: done.into_iter().map(|(_, m)| Some(m)).collect(),
         unresolved,
@@ -195,7 +198,16 @@ pub fn parameterize_charts(
         degenerate_splits,
         degenerate_faces,
         merges,
-    })
+        stretch: StretchStats::default(),
+    };
+    // Last, on the final valid maps: the stretch optimisation (it keeps every guarantee).
+    result.stretch = optimize_stretch_charts(
+        mesh,
+        &mut result,
+        options.stretch_optimization,
+        options.stretch_passes,
+    );
+    Ok(result)
 }
 
 /// What one round does with one chart (`process_chart`).
