@@ -4,8 +4,8 @@
 //!
 //! Purpose: LSCM maps are conformal, so their area (and thus texel density) varies over a chart;
 //! Sander's geometric stretch measures that. [`optimize_chart_stretch`] lowers it on a valid map
-//! without ever making it invalid; [`optimize_stretch_charts`] runs it on every chart of the
-//! parameterize stage's result, in parallel.
+//! without ever making it invalid; `stage::optimize_stretch_charts` runs it on every chart of
+//! the parameterize stage's result, in parallel.
 //!
 //! Metric (the report's, `measure/stretch.rs`): per face, the singular values `Γ ≥ γ` of the
 //! Jacobian of the affine map from texture to surface; the chart is scaled so that its UV area
@@ -56,35 +56,10 @@
 //! vertex's neighbourhood); K. Zhou, J. Snyder, B. Guo, H.-Y. Shum, "Iso-charts", SGP 2004,
 //! §3 (the symmetric L∞ `max(Γ, 1/γ)`) and §4 (a few stretch-minimising iterations after the
 //! initial map).
-use rayon::prelude::*;
-
 use super::chart::exceeds;
 use super::defects::{crossing_among, fold_with_boundary, segments_intersect};
-use super::{chart_mesh, conformal_energy, ChartMesh, ParameterizedCharts};
-use crate::mesh::TriangleMesh;
-
-/// Which stretch optimisation runs on every chart's map after validation.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum StretchOptimization {
-    /// Maps are kept as the parameterizer made them (conformal). The default: on the bunny the
-    /// optimisation lowers L2 1.037 → 1.028 and L∞ 3.95 → 3.91 but the packing efficiency
-    /// falls 0.661 → 0.638 (boundary moves make the outlines less compact) and it costs more
-    /// than the pipeline's time budget; see issue 22.
-    #[default]
-    None,
-    /// Sander et al. 2001: L∞ stretch first, then L2 (module doc).
-    LinfL2,
-}
-
-impl StretchOptimization {
-    /// The wire name (`none`, `linf_l2`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::None => "none",
-            Self::LinfL2 => "linf_l2",
-        }
-    }
-}
+pub use super::options::StretchOptimization;
+use super::ChartMesh;
 
 /// The L∞ phase visits the vertices whose local maximum of `v_f` exceeds 1 by at least this
 /// fraction of the chart's L∞'s excess over 1. Trade-off: lower visits more vertices (more cost) for a tail that the next
@@ -134,7 +109,7 @@ pub struct ChartStretchOutcome {
     pub after: Option<(f64, f64)>,
 }
 
-/// Counters of [`optimize_stretch_charts`] over all charts.
+/// Counters of the stretch optimisation over all charts (`stage::optimize_stretch_charts`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct StretchStats {
     /// Charts whose map was optimised.
@@ -147,97 +122,9 @@ pub struct StretchStats {
     pub passes_undone: usize,
 }
 
-/// One chart's result: its index, its new UVs and conformal energy when a move was kept, and
-/// the outcome.
-type ChartResult = (usize, Option<(Vec<[f64; 2]>, f64)>, ChartStretchOutcome);
-
-/// Optimises every chart of `v` (module doc) with `passes` passes of each phase; charts in
-/// parallel, results in chart order (deterministic). Charts with a defect listed in
-/// `v.unresolved` other than a bound are left alone, as are charts made only of zero-area
-/// faces.
-pub fn optimize_stretch_charts(
-    mesh: &TriangleMesh,
-    v: &mut ParameterizedCharts,
-    method: StretchOptimization,
-    passes: u32,
-) -> StretchStats {
-    let mut stats = StretchStats::default();
-    if method == StretchOptimization::None || passes == 0 {
-        return stats;
-    }
-    let bad: Vec<usize> = v
-        .unresolved
-        .iter()
-        .filter(|(_, d)| {
-            !matches!(
-                d,
-                super::ChartDefect::Stretch { .. } | super::ChartDefect::AreaRatio { .. }
-            )
-        })
-        .map(|(c, _)| *c)
-        .collect();
-    let charts = &v.segmentation.charts;
-    let mut order: Vec<usize> = (0..charts.len()).filter(|i| !bad.contains(i)).collect();
-    // Largest first, so that a big chart does not start last; results go back by index.
-    order.sort_by_key(|&i| (std::cmp::Reverse(charts[i].len()), i));
-    let results: Vec<ChartResult> = order
-        .into_par_iter()
-        .with_max_len(1)
-        .map(|i| {
-            let faces = &charts[i];
-            let Some((map, _)) = v.maps[i].as_ref() else {
-                return (i, None, ChartStretchOutcome::default());
-            };
-            let (cm, _) = chart_mesh(mesh, faces);
-            let zero_area: Vec<bool> = faces
-                .iter()
-                .zip(&cm.triangles)
-                .map(|(&f, t)| mesh.face_degeneracy(f).is_some() || zero_model_area(&cm, t))
-                .collect();
-            if zero_area.iter().all(|&z| z) || map.uv.len() != cm.positions_m.len() {
-                return (i, None, ChartStretchOutcome::default());
-            }
-            let mut uv = map.uv.clone();
-            let chart = StretchChart {
-                positions_m: &cm.positions_m,
-                triangles: &cm.triangles,
-                zero_area: &zero_area,
-            };
-            let outcome = optimize_chart_stretch(&chart, &mut uv, passes);
-            if outcome.moves == 0 {
-                return (i, None, outcome);
-            }
-            let energy = conformal_energy(&cm, &uv);
-            (i, Some((uv, energy)), outcome)
-        })
-        .collect();
-    let mut by_chart: Vec<Option<ChartResult>> = (0..charts.len()).map(|_| None).collect();
-    for r in results {
-        let i = r.0;
-        by_chart[i] = Some(r);
-    }
-    for (i, r) in by_chart.into_iter().enumerate() {
-        let Some((_, new, outcome)) = r else {
-            continue;
-        };
-        if outcome.optimized {
-            stats.charts_optimized += 1;
-        } else if v.maps[i].is_some() {
-            stats.charts_skipped += 1;
-        }
-        stats.moves += outcome.moves;
-        stats.passes_undone += outcome.passes_undone;
-        if let (Some((uv, energy)), Some((map, _))) = (new, v.maps[i].as_mut()) {
-            map.uv = uv;
-            map.conformal_energy = energy;
-        }
-    }
-    stats
-}
-
 /// The parameterizer's own zero-area test (`ChartMesh::validate`): twice the area at most 1e-12
 /// of the longest edge squared.
-fn zero_model_area(cm: &ChartMesh, t: &[u32; 3]) -> bool {
+pub(super) fn zero_model_area(cm: &ChartMesh, t: &[u32; 3]) -> bool {
     let [a, b, c] = t.map(|i| cm.positions_m[i as usize]);
     let e0 = sub3(b, a);
     let e1 = sub3(c, a);
