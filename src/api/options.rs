@@ -6,7 +6,7 @@
 //! refused, so a typo is an error rather than a silently ignored option.
 use serde::{Deserialize, Serialize};
 
-use crate::atlas::parameterize::ParameterizeMethod;
+use crate::atlas::parameterize::{ParameterizeMethod, StretchOptimization};
 use crate::atlas::{AtlasError, AtlasOptions, TexelDensity};
 use crate::gltf_io::{OutputFormat, UvTarget};
 
@@ -41,6 +41,17 @@ pub enum SolverJson {
     Direct,
     /// HLSCM (cascadic multigrid over a progressive mesh).
     Hierarchical,
+}
+
+/// Which stretch optimisation runs on every chart's map after validation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum StretchOptimizationJson {
+    /// None: the conformal (LSCM) maps as they are (the default).
+    #[default]
+    None,
+    /// Sander et al. 2001: L∞ stretch first, then L2, by vertex moves that never flip.
+    LinfL2,
 }
 
 /// Where the atlas UVs go.
@@ -138,6 +149,12 @@ pub struct OptionsJson {
     /// Solver, default `auto`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub solver: Option<SolverJson>,
+    /// Stretch optimisation of every chart's map after validation, default `none`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stretch_optimization: Option<StretchOptimizationJson>,
+    /// Passes of each phase of the stretch optimisation (L∞, then L2), >= 1. Default 4.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stretch_passes: Option<u32>,
     /// Which `TEXCOORD_k` receives the atlas on every triangle primitive, default
     /// `"first_free"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -221,6 +238,14 @@ impl OptionsJson {
             SolverJson::Direct => ParameterizeMethod::Direct,
             SolverJson::Hierarchical => ParameterizeMethod::Hierarchical,
         };
+        atlas.parameterize.stretch_optimization =
+            match self.stretch_optimization.unwrap_or_default() {
+                StretchOptimizationJson::None => StretchOptimization::None,
+                StretchOptimizationJson::LinfL2 => StretchOptimization::LinfL2,
+            };
+        if let Some(n) = self.stretch_passes {
+            atlas.parameterize.stretch_passes = n;
+        }
         atlas.check()?;
         let uv_target = match self.uv_set {
             None | Some(UvSetJson::Named(UvSetName::FirstFree)) => UvTarget::FirstFree,
@@ -271,6 +296,11 @@ impl OptionsJson {
                 ParameterizeMethod::Hierarchical => SolverJson::Hierarchical,
                 _ => SolverJson::Auto,
             }),
+            stretch_optimization: Some(match a.parameterize.stretch_optimization {
+                StretchOptimization::None => StretchOptimizationJson::None,
+                StretchOptimization::LinfL2 => StretchOptimizationJson::LinfL2,
+            }),
+            stretch_passes: Some(a.parameterize.stretch_passes),
             uv_set: Some(match settings.uv_target {
                 UvTarget::FirstFree => UvSetJson::Named(UvSetName::FirstFree),
                 UvTarget::Replace(k) => UvSetJson::Index(k),
@@ -301,7 +331,8 @@ mod tests {
         let text = r#"{"resolution":[2048,512],"padding_texels":4,"texels_per_unit":300.5,
             "rotations":4,"max_charts":12,"max_stretch":1.2,"max_area_ratio":3.0,"merge_passes":2,
             "merge_max_chart_fraction":0.25,"feature_fraction":0.1,"border_band_fraction":0.2,
-            "hard_edge_angle_deg":45.5,"solver":"hierarchical","uv_set":2,"output_format":"gltf"}"#;
+            "hard_edge_angle_deg":45.5,"solver":"hierarchical","stretch_optimization":"linf_l2",
+            "stretch_passes":7,"uv_set":2,"output_format":"gltf"}"#;
         let o: OptionsJson = serde_json::from_str(text).unwrap();
         let s = o.to_settings().unwrap();
         assert_eq!(
@@ -326,6 +357,11 @@ mod tests {
             s.atlas.parameterize.flatten.method,
             ParameterizeMethod::Hierarchical
         );
+        assert_eq!(
+            s.atlas.parameterize.stretch_optimization,
+            StretchOptimization::LinfL2
+        );
+        assert_eq!(s.atlas.parameterize.stretch_passes, 7);
         assert_eq!(s.uv_target, UvTarget::Replace(2));
         assert_eq!(s.format, OutputFormat::Gltf);
         assert_eq!(OptionsJson::effective(&s), o);

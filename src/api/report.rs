@@ -113,6 +113,13 @@ pub struct PipelineJson {
     /// Charts made only of degenerate faces (zero area or a repeated vertex): not packed, their
     /// corners sit on a coincident vertex of a packed chart (zero UV area).
     pub degenerate_charts: usize,
+    /// The stretch optimisation that ran on the charts' maps: `linf_l2` (Sander et al. 2001)
+    /// or `none`.
+    pub stretch_optimization: &'static str,
+    /// Charts whose map the stretch optimisation ran on.
+    pub charts_stretch_optimized: usize,
+    /// Vertex moves it kept, over all charts.
+    pub stretch_vertex_moves: usize,
 }
 
 /// Wall-clock seconds per step.
@@ -197,6 +204,9 @@ impl ReportJson {
                 texels_per_unit: s.texels_per_unit,
                 pack_trials: s.pack_trials,
                 degenerate_charts: s.degenerate_charts,
+                stretch_optimization: s.stretch_optimization.name(),
+                charts_stretch_optimized: s.stretch.charts_optimized,
+                stretch_vertex_moves: s.stretch.moves,
             },
             timings_s,
         }

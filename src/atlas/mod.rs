@@ -7,7 +7,8 @@
 //!   disk (Lévy et al. 2002 §3.1–3.2);
 //! - [`parameterize`]: `parameterize_charts` flattens every chart (LSCM, Lévy et al. 2002 §2;
 //!   hierarchical LSCM, Ray & Lévy 2003) and splits and merges charts until every map is valid
-//!   (§3.3);
+//!   (§3.3); last, optionally, every valid map's stretch is optimised (Sander et al. 2001,
+//!   `stretch.rs`);
 //! - [`pack`]: `pack_charts` places the flattened charts on texture pages at one texel density,
 //!   with padding (the horizon packer, Lévy et al. 2002 §4, from four directions with rotations,
 //!   Zhou et al. 2004 §6). At the stage's start, on small meshes with few charts that pack
@@ -75,6 +76,10 @@ pub struct PipelineStats {
     /// Charts made only of degenerate faces (zero area or a repeated vertex): not packed, their
     /// corners take the UV of a coincident vertex of a packed chart (see [`generate`]).
     pub degenerate_charts: usize,
+    /// The stretch optimisation that ran on the final maps (`parameterize::stretch`).
+    pub stretch_optimization: parameterize::StretchOptimization,
+    /// What it did: charts optimised and skipped, vertex moves kept.
+    pub stretch: parameterize::StretchStats,
 }
 
 /// The atlas of one mesh.
@@ -165,6 +170,8 @@ pub fn generate(
         parameterize_splits: parameterized.splits,
         parameterize_merges: parameterized.merges,
         packing_cuts,
+        stretch_optimization: options.parameterize.stretch_optimization,
+        stretch: parameterized.stretch,
         ..PipelineStats::default()
     };
     for (chart, defect) in &parameterized.unresolved {

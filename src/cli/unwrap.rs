@@ -11,7 +11,8 @@ use std::process::ExitCode;
 use anyhow::{bail, Context as _};
 use indicatif::{ProgressBar, ProgressStyle};
 use texatlas::api::{
-    OptionsJson, OutputFormatJson, ResolutionJson, SolverJson, UvSetJson, UvSetName,
+    OptionsJson, OutputFormatJson, ResolutionJson, SolverJson, StretchOptimizationJson, UvSetJson,
+    UvSetName,
 };
 use texatlas::atlas::{Progress, Stage};
 use texatlas::preview::{preview_size_px, render_preview};
@@ -92,6 +93,13 @@ pub struct OptionFlags {
     /// Solver: auto, direct or hierarchical. Default auto.
     #[arg(long, value_parser = parse_solver)]
     pub solver: Option<SolverJson>,
+    /// Stretch optimisation of every chart's map after validation: linf_l2 (Sander et al.
+    /// 2001: L∞ then L2, never flipping) or none. Default none.
+    #[arg(long, value_parser = parse_stretch_optimization)]
+    pub stretch_optimization: Option<StretchOptimizationJson>,
+    /// Passes of each phase of the stretch optimisation (>= 1). Default 4.
+    #[arg(long)]
+    pub stretch_passes: Option<u32>,
     /// Which TEXCOORD_k receives the atlas, one set for every primitive: `first_free` (the
     /// lowest set no primitive has) or a set number k to replace. Default first_free.
     #[arg(long, value_parser = parse_uv_set)]
@@ -118,6 +126,8 @@ impl OptionFlags {
             border_band_fraction: self.border_band_fraction.map(|b| b.0),
             hard_edge_angle_deg: self.hard_edge_angle_deg.map(|b| b.0),
             solver: self.solver,
+            stretch_optimization: self.stretch_optimization,
+            stretch_passes: self.stretch_passes,
             uv_set: self.uv_set,
             output_format: self.output_format,
         }
@@ -169,6 +179,16 @@ fn parse_solver(s: &str) -> Result<SolverJson, String> {
         "hierarchical" => Ok(SolverJson::Hierarchical),
         _ => Err(format!(
             "`{s}` is not a solver; use auto, direct or hierarchical"
+        )),
+    }
+}
+
+fn parse_stretch_optimization(s: &str) -> Result<StretchOptimizationJson, String> {
+    match s {
+        "linf_l2" => Ok(StretchOptimizationJson::LinfL2),
+        "none" => Ok(StretchOptimizationJson::None),
+        _ => Err(format!(
+            "`{s}` is not a stretch optimisation; use linf_l2 or none"
         )),
     }
 }

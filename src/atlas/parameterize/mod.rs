@@ -28,7 +28,9 @@
 //!   seeds of a sock-shaped chart (§3.2, Figure 5);
 //! - `warm_start`: a split part keeps its parent's map when that map is valid for it;
 //! - `merge`: the merge-back of valid charts into a neighbour; `schedule`: the largest-first
-//!   parallel map and the speculative flattening of merge tries.
+//!   parallel map and the speculative flattening of merge tries;
+//! - [`stretch`]: last, optionally, the stretch optimisation of every valid chart's map (Sander et al. 2001:
+//!   L∞ then L2, vertex moves inside the no-flip kernel), which keeps every guarantee below.
 //!
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §2–§3.3; N. Ray, B. Lévy, "Hierarchical
@@ -48,6 +50,7 @@ mod schedule;
 pub mod sock;
 mod split;
 pub mod stage;
+pub mod stretch;
 #[cfg(any(test, feature = "test-support"))]
 pub mod test_meshes;
 mod warm_start;
@@ -63,6 +66,7 @@ pub use hlscm::{HlscmLevel, HlscmOptions, HlscmReport, HlscmSmoother};
 pub use lscm::{conformal_energy, flipped_faces, LscmSystem, Pin};
 pub use options::{ParameterizeOptions, LATE_MERGE_MAX_FACES, MERGE_CAP_FLOOR_FACES};
 pub use stage::{parameterize_charts, ParameterizedCharts};
+pub use stretch::{optimize_chart_stretch, StretchChart, StretchOptimization, StretchStats};
 
 use crate::numerics::{CholeskyError, SparseError};
 

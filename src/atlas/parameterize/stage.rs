@@ -20,6 +20,10 @@
 //!   outlier faces decide (it over-splits scanned meshes); the stretch bound is area-weighted,
 //!   measures what the report measures, and bounds the atlas' global L2 stretch by construction.
 //!
+//! Last, with [`ParameterizeOptions::stretch_optimization`] `LinfL2`, every valid chart's map is
+//! optimised for stretch (`optimize_stretch_charts`, `super::stretch`); it keeps every guarantee
+//! above and never raises a chart's L2 or L∞.
+//!
 //! Every part is passed through the disk guarantee again, so the result still satisfies the
 //! segmentation contract. A part first tries its parent's map restricted to it
 //! (`warm_start`); zero-area faces are handled by `degenerate`. A chart the
@@ -45,11 +49,17 @@ use super::degenerate::{flatten_around_degenerate, line_map, split_off_degenerat
 use super::merge::merge_back;
 use super::schedule::in_parallel_largest_first;
 use super::split::split_for;
+use super::stretch::{
+    optimize_chart_stretch, zero_model_area, ChartStretchOutcome, StretchChart,
+    StretchOptimization, StretchStats,
+};
 use super::warm_start::restrict_map;
+use super::{chart_mesh, conformal_energy};
 use super::{LocatedMap, ParameterizeChartsError, ParameterizeOptions};
 use crate::atlas::progress::StageProgress;
 use crate::atlas::segment::{disk_check, enforce_disks, finish, SegmentStats, Segmentation};
 use crate::mesh::{FaceId, TriangleMesh};
+use rayon::prelude::*;
 
 /// The validated charts and their maps.
 #[derive(Debug, Clone, PartialEq)]
@@ -76,6 +86,8 @@ pub struct ParameterizedCharts {
     pub degenerate_faces: usize,
     /// Small charts merged back into a neighbour after splitting.
     pub merges: usize,
+    /// What the stretch optimisation of the final maps did (`super::stretch`).
+    pub stretch: StretchStats,
 }
 
 /// The parameterize stage: flattens every chart of `seg`, splits invalid ones until all are
@@ -187,7 +199,7 @@ pub fn parameterize_charts(
         .faces()
         .filter(|&f| mesh.face_degeneracy(f).is_some())
         .count();
-    Ok(ParameterizedCharts {
+    let mut result = ParameterizedCharts {
         segmentation,
         maps: done.into_iter().map(|(_, m)| Some(m)).collect(),
         unresolved,
@@ -195,7 +207,16 @@ pub fn parameterize_charts(
         degenerate_splits,
         degenerate_faces,
         merges,
-    })
+        stretch: StretchStats::default(),
+    };
+    // Last, on the final valid maps: the stretch optimisation (it keeps every guarantee).
+    result.stretch = optimize_stretch_charts(
+        mesh,
+        &mut result,
+        options.stretch_optimization,
+        options.stretch_passes,
+    );
+    Ok(result)
 }
 
 /// What one round does with one chart (`process_chart`).
@@ -282,4 +303,92 @@ pub(super) fn process_chart(
         map,
         defect,
     }
+}
+
+/// One chart's result: its index, its new UVs and conformal energy when a move was kept, and
+/// the outcome.
+type ChartResult = (usize, Option<(Vec<[f64; 2]>, f64)>, ChartStretchOutcome);
+
+/// Optimises every chart of `v` (`super::stretch`) with `passes` passes of each phase; charts in
+/// parallel, results in chart order (deterministic). Charts with a defect listed in
+/// `v.unresolved` other than a bound are left alone, as are charts made only of zero-area
+/// faces.
+pub(super) fn optimize_stretch_charts(
+    mesh: &TriangleMesh,
+    v: &mut ParameterizedCharts,
+    method: StretchOptimization,
+    passes: u32,
+) -> StretchStats {
+    let mut stats = StretchStats::default();
+    if method == StretchOptimization::None || passes == 0 {
+        return stats;
+    }
+    let bad: Vec<usize> = v
+        .unresolved
+        .iter()
+        .filter(|(_, d)| {
+            !matches!(
+                d,
+                ChartDefect::Stretch { .. } | ChartDefect::AreaRatio { .. }
+            )
+        })
+        .map(|(c, _)| *c)
+        .collect();
+    let charts = &v.segmentation.charts;
+    let mut order: Vec<usize> = (0..charts.len()).filter(|i| !bad.contains(i)).collect();
+    // Largest first, so that a big chart does not start last; results go back by index.
+    order.sort_by_key(|&i| (std::cmp::Reverse(charts[i].len()), i));
+    let results: Vec<ChartResult> = order
+        .into_par_iter()
+        .with_max_len(1)
+        .map(|i| {
+            let faces = &charts[i];
+            let Some((map, _)) = v.maps[i].as_ref() else {
+                return (i, None, ChartStretchOutcome::default());
+            };
+            let (cm, _) = chart_mesh(mesh, faces);
+            let zero_area: Vec<bool> = faces
+                .iter()
+                .zip(&cm.triangles)
+                .map(|(&f, t)| mesh.face_degeneracy(f).is_some() || zero_model_area(&cm, t))
+                .collect();
+            if zero_area.iter().all(|&z| z) || map.uv.len() != cm.positions_m.len() {
+                return (i, None, ChartStretchOutcome::default());
+            }
+            let mut uv = map.uv.clone();
+            let chart = StretchChart {
+                positions_m: &cm.positions_m,
+                triangles: &cm.triangles,
+                zero_area: &zero_area,
+            };
+            let outcome = optimize_chart_stretch(&chart, &mut uv, passes);
+            if outcome.moves == 0 {
+                return (i, None, outcome);
+            }
+            let energy = conformal_energy(&cm, &uv);
+            (i, Some((uv, energy)), outcome)
+        })
+        .collect();
+    let mut by_chart: Vec<Option<ChartResult>> = (0..charts.len()).map(|_| None).collect();
+    for r in results {
+        let i = r.0;
+        by_chart[i] = Some(r);
+    }
+    for (i, r) in by_chart.into_iter().enumerate() {
+        let Some((_, new, outcome)) = r else {
+            continue;
+        };
+        if outcome.optimized {
+            stats.charts_optimized += 1;
+        } else if v.maps[i].is_some() {
+            stats.charts_skipped += 1;
+        }
+        stats.moves += outcome.moves;
+        stats.passes_undone += outcome.passes_undone;
+        if let (Some((uv, energy)), Some((map, _))) = (new, v.maps[i].as_mut()) {
+            map.uv = uv;
+            map.conformal_energy = energy;
+        }
+    }
+    stats
 }
