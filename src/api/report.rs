@@ -113,6 +113,13 @@ pub struct PipelineJson {
     /// Charts made only of degenerate faces (zero area or a repeated vertex): not packed, their
     /// corners sit on a coincident vertex of a packed chart (zero UV area).
     pub degenerate_charts: usize,
+    /// The flip promise's last line of defence: 3-D-degenerate faces whose written UV triangle
+    /// had area and was collapsed to a segment.
+    pub uv_collapsed_faces: usize,
+    /// ... UV vertices moved by a few `f32` spacings to unflip a face with 3-D area.
+    pub uv_nudged_vertices: usize,
+    /// ... faces split off into a chart of their own, then packed again.
+    pub uv_guard_splits: usize,
 }
 
 /// Wall-clock seconds per step.
@@ -197,6 +204,9 @@ impl ReportJson {
                 texels_per_unit: s.texels_per_unit,
                 pack_trials: s.pack_trials,
                 degenerate_charts: s.degenerate_charts,
+                uv_collapsed_faces: s.uv_collapsed_faces,
+                uv_nudged_vertices: s.uv_nudged_vertices,
+                uv_guard_splits: s.uv_guard_splits,
             },
             timings_s,
         }
