@@ -69,7 +69,12 @@ pub(super) fn guard_uvs(
         return out;
     }
     // 1. Collapse 3-D-degenerate faces with UV area (changes no other face).
-    out.collapsed_faces += collapse_all(mesh, &check.degenerate_3d, corner_uvs);
+    let shared = if (0..corner_uvs.len()).any(|f| check.degenerate_3d[f] && !check.uv_degenerate[f]) {
+        SharedEdges::new(&UvVertices::new(mesh, corner_uvs, face_page))
+    } else {
+        SharedEdges::default()
+    };
+    out.collapsed_faces += collapse_all(mesh, &check.degenerate_3d, &shared, corner_uvs);
     // 2. Nudge the faces with 3-D area at fault (charts recomputed after the collapses, which
     //    can cut a chart).
     let check = orientation_check(mesh, corner_uvs, face_page);
@@ -89,7 +94,7 @@ pub(super) fn guard_uvs(
     }
     // A nudge moves the ends of a collapsed face's long edge but not its third corner, which
     // has a key of its own: collapse again (a no-op where nothing moved).
-    collapse_all(mesh, &check.degenerate_3d, corner_uvs);
+    collapse_all(mesh, &check.degenerate_3d, &shared, corner_uvs);
     // 3. What is left, by the report's rules.
     let check = orientation_check(mesh, corner_uvs, face_page);
     out.unrepaired = (0..corner_uvs.len())
@@ -103,29 +108,70 @@ pub(super) fn guard_uvs(
 fn collapse_all(
     mesh: &TriangleMesh,
     degenerate_3d: &[bool],
+    shared: &SharedEdges,
     corner_uvs: &mut [[[f32; 2]; 3]],
 ) -> usize {
     let mut n = 0;
     for (f, uv) in corner_uvs.iter_mut().enumerate() {
         if degenerate_3d[f] && !signed_area(uv).1 {
-            collapse(mesh, FaceId(f as u32), uv);
+            collapse(mesh, f, shared, uv);
             n += 1;
         }
     }
     n
 }
 
-/// Two equal corners for the 3-D-degenerate face `f`: the corner off its longest 3-D edge
-/// takes the UV of the nearer (in 3-D) end of that edge. `A2` is then exactly 0.
-fn collapse(mesh: &TriangleMesh, f: FaceId, uv: &mut [[f32; 2]; 3]) {
-    let p = mesh.face_positions(f);
+/// Two equal corners for the 3-D-degenerate face `f`: it keeps one edge, the longest (in 3-D)
+/// of those another face shares in the output (so that the face stays in its chart), or else
+/// its longest edge; the third corner takes the UV of the nearer (in 3-D) end of that edge.
+/// `A2` is then exactly 0.
+fn collapse(mesh: &TriangleMesh, f: usize, shared: &SharedEdges, uv: &mut [[f32; 2]; 3]) {
+    let p = mesh.face_positions(FaceId(f as u32));
     let d2 = |a: usize, b: usize| -> f64 { (0..3).map(|i| (p[a][i] - p[b][i]).powi(2)).sum() };
-    // Edge k joins corners k and k+1; the corner off it is k+2.
+    // Edge k joins corners k and k+1; the corner off it is k+2. Ties to the lowest k.
+    let rank = |k: usize| (shared.is_shared(f, k), d2(k, (k + 1) % 3));
     let k = (0..3)
-        .max_by(|&a, &b| d2(a, (a + 1) % 3).total_cmp(&d2(b, (b + 1) % 3)).then(b.cmp(&a)))
+        .max_by(|&a, &b| {
+            let (ra, rb) = (rank(a), rank(b));
+            ra.0.cmp(&rb.0).then(ra.1.total_cmp(&rb.1)).then(b.cmp(&a))
+        })
         .unwrap_or(0);
     let (a, b, c) = (k, (k + 1) % 3, (k + 2) % 3);
     uv[c] = if d2(c, a) <= d2(c, b) { uv[a] } else { uv[b] };
+}
+
+/// Which half-edges of the output share their (unordered) pair of UV vertices with another
+/// half-edge: the edges inside a chart.
+#[derive(Default)]
+struct SharedEdges {
+    /// Per half-edge `3f + k`: shared.
+    shared: Vec<bool>,
+}
+
+impl SharedEdges {
+    fn new(v: &UvVertices) -> Self {
+        let n = v.group_of_corner.len();
+        let pair = |h: usize| {
+            let (f, k) = (h / 3, h % 3);
+            let a = v.group_of_corner[3 * f + k];
+            let b = v.group_of_corner[3 * f + (k + 1) % 3];
+            (a.min(b), a.max(b))
+        };
+        let mut pairs: Vec<(u32, u32)> = (0..n).map(pair).collect();
+        pairs.sort_unstable();
+        let shared = (0..n)
+            .map(|h| {
+                let p = pair(h);
+                let lo = pairs.partition_point(|&q| q < p);
+                pairs.get(lo + 1) == Some(&p)
+            })
+            .collect();
+        Self { shared }
+    }
+
+    fn is_shared(&self, f: usize, k: usize) -> bool {
+        self.shared.get(3 * f + k).copied().unwrap_or(false)
+    }
 }
 
 /// The corners of the output grouped by key (glTF mesh, 3-D position, page, UV bits with
