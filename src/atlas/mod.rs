@@ -309,8 +309,7 @@ fn pack_and_write(
     let packing = match packing {
         // The cut step packed exactly these charts already (same inputs, deterministic).
         Some(p) => {
-            if progress.advance(Stage::Pack, packed.len(), packed.len()) == ControlFlow::Break(())
-            {
+            if progress.advance(Stage::Pack, packed.len(), packed.len()) == ControlFlow::Break(()) {
                 return Err(AtlasError::Cancelled { stage: Stage::Pack });
             }
             p

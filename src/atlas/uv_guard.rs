@@ -23,7 +23,9 @@
 //!    opposite UV edge, towards its chart's orientation, by 1, 2, 4, … up to
 //!    [`NUDGE_MAX_ULPS`] `f32` spacings; the first move after which every face at that vertex is
 //!    non-degenerate and oriented as its chart is kept. A move of at most 256 spacings is below
-//!    1/60 texel at 4096 px, far inside the padding, so it cannot reach another chart;
+//!    1/60 texel at 4096 px, far inside the padding, so it cannot reach another chart. A face
+//!    whose UV corners all coincide (a triangle smaller than the `f32` spacing) first has one
+//!    corner moved off the others (along ±u or ±v, the other faces at it staying fine);
 //! 3. what is left is returned, for `generate` to split each such face off into a chart of its
 //!    own and pack again (a single-face chart is never flipped: its orientation is its own).
 //!
@@ -69,7 +71,8 @@ pub(super) fn guard_uvs(
         return out;
     }
     // 1. Collapse 3-D-degenerate faces with UV area (changes no other face).
-    let shared = if (0..corner_uvs.len()).any(|f| check.degenerate_3d[f] && !check.uv_degenerate[f]) {
+    let shared = if (0..corner_uvs.len()).any(|f| check.degenerate_3d[f] && !check.uv_degenerate[f])
+    {
         SharedEdges::new(&UvVertices::new(mesh, corner_uvs, face_page))
     } else {
         SharedEdges::default()
@@ -89,6 +92,17 @@ pub(super) fn guard_uvs(
             }
             if (0..3).any(|k| nudge(&check, &vertices, corner_uvs, f, k)) {
                 out.nudged_vertices += 1;
+                continue;
+            }
+            // A face whose UV corners coincide (a triangle smaller than the `f32` spacing)
+            // has no opposite edge to move away from: separate one corner first.
+            for k in 0..3 {
+                if separate(&check, &vertices, corner_uvs, f, k)
+                    && (0..3).any(|j| nudge(&check, &vertices, corner_uvs, f, j))
+                {
+                    out.nudged_vertices += 2;
+                    break;
+                }
             }
         }
     }
@@ -252,6 +266,76 @@ fn face_ok(check: &OrientationCheck, corner_uvs: &[[[f32; 2]; 3]], f: usize) -> 
     !degenerate && (a2 > 0.0) == check.chart_positive[check.chart_of_face[f] as usize]
 }
 
+/// Moves the UV vertex at corner `k` of face `f` off the UV of the face's other corners, by
+/// 1, 2, 4, … [`NUDGE_MAX_ULPS`] `f32` spacings along +u, −u, +v or −v (the first move after
+/// which every other face at that vertex is still fine); returns whether one was made.
+fn separate(
+    check: &OrientationCheck,
+    vertices: &UvVertices,
+    corner_uvs: &mut [[[f32; 2]; 3]],
+    f: usize,
+    k: usize,
+) -> bool {
+    let c = corner_uvs[f][k];
+    let group = vertices.group(3 * f + k);
+    for dir in [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]] {
+        let mut steps = 1u32;
+        while steps <= NUDGE_MAX_ULPS {
+            let moved = step(c, dir, steps);
+            steps *= 2;
+            let uv = corner_uvs[f];
+            if moved == c
+                || moved == uv[(k + 1) % 3]
+                || moved == uv[(k + 2) % 3]
+                || !moved.iter().all(|x| x.is_finite())
+            {
+                continue;
+            }
+            if moves_fine(check, group, corner_uvs, moved, f) {
+                for &corner in group {
+                    corner_uvs[corner as usize / 3][corner as usize % 3] = moved;
+                }
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// `c` moved by `steps` `f32` spacings (the larger of its two coordinates') along `dir`.
+fn step(c: [f32; 2], dir: [f64; 2], steps: u32) -> [f32; 2] {
+    let spacing = |x: f32| -> f64 {
+        let x = x.abs().max(f32::MIN_POSITIVE);
+        f64::from(f32::from_bits(x.to_bits() + 1) - x)
+    };
+    let d = spacing(c[0]).max(spacing(c[1])) * f64::from(steps);
+    [
+        (f64::from(c[0]) + d * dir[0]) as f32,
+        (f64::from(c[1]) + d * dir[1]) as f32,
+    ]
+}
+
+/// Whether every face at the UV vertex `group` but `except` (3-D-degenerate ones excepted) is
+/// non-degenerate and oriented as its chart with the vertex at `moved`.
+fn moves_fine(
+    check: &OrientationCheck,
+    group: &[u32],
+    corner_uvs: &[[[f32; 2]; 3]],
+    moved: [f32; 2],
+    except: usize,
+) -> bool {
+    group.iter().all(|&corner| {
+        let (g, j) = (corner as usize / 3, corner as usize % 3);
+        if g == except || check.degenerate_3d[g] {
+            return true;
+        }
+        let mut t = corner_uvs[g];
+        t[j] = moved;
+        let (a2, degenerate) = signed_area(&t);
+        !degenerate && (a2 > 0.0) == check.chart_positive[check.chart_of_face[g] as usize]
+    })
+}
+
 /// Tries to repair face `f` by moving its UV vertex at corner `k` (module doc, step 2). Keeps
 /// the first move after which every face at that vertex is fine (3-D-degenerate ones excepted:
 /// they keep two equal corners or were fine); returns whether one was kept.
@@ -266,41 +350,25 @@ fn nudge(
     let uv = corner_uvs[f];
     let (a, b, c) = (uv[(k + 1) % 3], uv[(k + 2) % 3], uv[k]);
     // A2 = ½ (b − a) × (c − a): its gradient in c is ½ (−e_v, e_u) with e = b − a.
-    let e = [f64::from(b[0]) - f64::from(a[0]), f64::from(b[1]) - f64::from(a[1])];
+    let e = [
+        f64::from(b[0]) - f64::from(a[0]),
+        f64::from(b[1]) - f64::from(a[1]),
+    ];
     let len = e[0].hypot(e[1]);
     if !(len > 0.0) {
         return false;
     }
     let sign = if positive { 1.0 } else { -1.0 };
     let n = [-e[1] / len * sign, e[0] / len * sign];
-    let spacing = |x: f32| -> f64 {
-        let x = x.abs().max(f32::MIN_POSITIVE);
-        f64::from(f32::from_bits(x.to_bits() + 1) - x)
-    };
-    let ulp = spacing(c[0]).max(spacing(c[1]));
     let group = vertices.group(3 * f + k);
     let mut steps = 1u32;
     while steps <= NUDGE_MAX_ULPS {
-        let d = ulp * f64::from(steps);
-        let moved = [
-            (f64::from(c[0]) + d * n[0]) as f32,
-            (f64::from(c[1]) + d * n[1]) as f32,
-        ];
+        let moved = step(c, n, steps);
         steps *= 2;
         if moved == c || !moved.iter().all(|x| x.is_finite()) {
             continue;
         }
-        let fine = group.iter().all(|&corner| {
-            let (g, j) = (corner as usize / 3, corner as usize % 3);
-            if check.degenerate_3d[g] {
-                return true;
-            }
-            let mut t = corner_uvs[g];
-            t[j] = moved;
-            let (a2, degenerate) = signed_area(&t);
-            !degenerate && (a2 > 0.0) == check.chart_positive[check.chart_of_face[g] as usize]
-        });
-        if fine {
+        if moves_fine(check, group, corner_uvs, moved, usize::MAX) {
             for &corner in group {
                 corner_uvs[corner as usize / 3][corner as usize % 3] = moved;
             }

@@ -56,7 +56,9 @@ fn apply(m: &mut MeshInput, d: Defect) {
             m.triangles.push([a, b, v]);
         }
         // A repeated vertex, with either order.
-        3 => m.triangles.push(if d.s < 0.5 { [a, a, b] } else { [b, a, b] }),
+        3 => m
+            .triangles
+            .push(if d.s < 0.5 { [a, a, b] } else { [b, a, b] }),
         // A repeated position (a copy of `a` that welds to it).
         4 => {
             let v = push(m, pa);

@@ -539,8 +539,7 @@ impl OrientationCheck {
     /// Counted in `flipped` by the report.
     pub fn flipped(&self, f: usize) -> bool {
         !self.uv_degenerate[f]
-            && (self.signed_uv_area[f] > 0.0)
-                != self.chart_positive[self.chart_of_face[f] as usize]
+            && (self.signed_uv_area[f] > 0.0) != self.chart_positive[self.chart_of_face[f] as usize]
     }
     /// A fault for the guard: flipped, UV-degenerate with 3-D area (counted in
     /// `degenerate_uv_with_3d_area`), or 3-D-degenerate with UV area (it covers texels for
@@ -605,7 +604,8 @@ fn measure_without_exact_overlaps(input: &MeasureInput<'_>) -> (AtlasReport, Vec
     report.area_3d_m2 = numpy::np_sum(&area_3d);
     report.uv_area = numpy::np_sum(&uv_area);
     drop((area_3d, uv_area));
-    let (chart_signed, chart_positive) = chart_orientation(&geo, &con.chart_of_face, con.num_charts);
+    let (chart_signed, chart_positive) =
+        chart_orientation(&geo, &con.chart_of_face, con.num_charts);
     report.flipped = (0..nf)
         .filter(|&f| is_flipped(&geo, &con.chart_of_face, &chart_positive, f))
         .count();
