@@ -355,7 +355,7 @@ fn nudge(
         f64::from(b[1]) - f64::from(a[1]),
     ];
     let len = e[0].hypot(e[1]);
-    if !(len > 0.0) {
+    if len.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return false;
     }
     let sign = if positive { 1.0 } else { -1.0 };

@@ -159,7 +159,9 @@ fn recount(mesh: &TriangleMesh, uvs: &[[[f32; 2]; 3]], face_page: &[u32]) -> (us
             .hypot(dt1)
             .max(ds2.hypot(dt2))
             .max((u[2][0] - u[1][0]).hypot(u[2][1] - u[1][1]));
-        deg2[f] = !(a2[f].abs() > 1e-12 * l2 * l2);
+        // The evaluator's `~(x > tol)`: NaN is degenerate.
+        let gt = |x: f64, tol: f64| x.partial_cmp(&tol) == Some(std::cmp::Ordering::Greater);
+        deg2[f] = !gt(a2[f].abs(), 1e-12 * l2 * l2);
         let p = mesh.face_positions(FaceId(f as u32));
         let e = |i: usize, j: usize| [0, 1, 2].map(|c| p[j][c] - p[i][c]);
         let (e1, e2, e3) = (e(0, 1), e(0, 2), e(1, 2));
@@ -171,7 +173,7 @@ fn recount(mesh: &TriangleMesh, uvs: &[[[f32; 2]; 3]], face_page: &[u32]) -> (us
         let len = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
         let a3 = 0.5 * len(n);
         let l3 = len(e1).max(len(e2)).max(len(e3));
-        let deg3 = !(a3 > 1e-12 * l3 * l3);
+        let deg3 = !gt(a3, 1e-12 * l3 * l3);
         deg_uv_3d += usize::from(deg2[f] && !deg3);
         if !deg2[f] {
             let r = find(&mut parent, f);
