@@ -120,6 +120,13 @@ pub struct PipelineJson {
     pub charts_stretch_optimized: usize,
     /// Vertex moves it kept, over all charts.
     pub stretch_vertex_moves: usize,
+    /// The flip promise's last line of defence: 3-D-degenerate faces whose written UV triangle
+    /// had area and was collapsed to a segment.
+    pub uv_collapsed_faces: usize,
+    /// ... UV vertices moved by a few `f32` spacings to unflip a face with 3-D area.
+    pub uv_nudged_vertices: usize,
+    /// ... faces split off into a chart of their own, then packed again.
+    pub uv_guard_splits: usize,
 }
 
 /// Wall-clock seconds per step.
@@ -207,6 +214,9 @@ impl ReportJson {
                 stretch_optimization: s.stretch_optimization.name(),
                 charts_stretch_optimized: s.stretch.charts_optimized,
                 stretch_vertex_moves: s.stretch.moves,
+                uv_collapsed_faces: s.uv_collapsed_faces,
+                uv_nudged_vertices: s.uv_nudged_vertices,
+                uv_guard_splits: s.uv_guard_splits,
             },
             timings_s,
         }

@@ -15,7 +15,15 @@
 //!   poorly, the packing-aware cuts (`packing_cuts.rs`, a feedback loop into the parameterize
 //!   stage) cut charts in two when that raises the packing efficiency; the packer's input is
 //!   built in `pack_input.rs`, and charts made only of degenerate faces get their UVs in
-//!   `degenerate.rs`;
+//!   `degenerate.rs`.
+//!   After packing, the written `f32` corner UVs pass the flip promise's last line of defence
+//!   (`uv_guard.rs`): by the report's own rules, a 3-D-degenerate face with UV area is collapsed
+//!   to a segment, a flipped or UV-degenerate face with 3-D area has one UV vertex nudged by a
+//!   few `f32` spacings, and a face no nudge repairs is split off into a chart of its own and the
+//!   charts packed again. **Guarantee:** the atlas has no flipped face and no face degenerate in
+//!   UV but not in 3-D, by the report and by the evaluator, on every input (degenerate,
+//!   near-degenerate and non-manifold parts included); the report shows the counts, so a
+//!   violation would never be hidden;
 //! - [`measure`]: `measure_atlas`, the quality report, with its definitions.
 //!
 //! Progress and cancellation: one [`Progress`] from the caller, seen by each stage through a
@@ -34,6 +42,7 @@ mod packing_cuts;
 pub mod parameterize;
 pub mod progress;
 pub mod segment;
+mod uv_guard;
 
 use std::ops::ControlFlow;
 
@@ -49,6 +58,7 @@ use pack_input::{pack_charts_of, pack_inputs, PackInputs};
 use packing_cuts::cut_for_packing;
 use parameterize::{parameterize_charts, ChartDefect};
 use segment::segment_charts;
+use uv_guard::{guard_uvs, split_off_faces};
 
 /// Counters of one [`generate`] run.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -80,6 +90,14 @@ pub struct PipelineStats {
     pub stretch_optimization: parameterize::StretchOptimization,
     /// What it did: charts optimised and skipped, vertex moves kept.
     pub stretch: parameterize::StretchStats,
+    /// The last line of defence (`uv_guard.rs`): 3-D-degenerate faces whose written UV triangle
+    /// had area and was collapsed to a segment.
+    pub uv_collapsed_faces: usize,
+    /// ... UV vertices moved by a few `f32` spacings to unflip a face with 3-D area.
+    pub uv_nudged_vertices: usize,
+    /// ... faces split off into a chart of their own (then packed again) because no nudge
+    /// repaired them.
+    pub uv_guard_splits: usize,
 }
 
 /// The atlas of one mesh.
@@ -164,7 +182,6 @@ pub fn generate(
     progress.stage_started(Stage::Pack);
     let (parameterized, packing_cuts, packing_of_cut_step) =
         cut_for_packing(mesh, parameterized, options)?;
-    let charts = &parameterized.segmentation.charts;
     let mut stats = PipelineStats {
         segmented_charts: seg.num_charts(),
         parameterize_splits: parameterized.splits,
@@ -182,7 +199,7 @@ pub fn generate(
             ChartDefect::Unparameterizable(e) => {
                 return Err(AtlasError::Unparameterizable {
                     chart: *chart,
-                    faces: charts[*chart].len(),
+                    faces: parameterized.segmentation.charts[*chart].len(),
                     detail: e.to_string(),
                 })
             }
@@ -197,61 +214,46 @@ pub fn generate(
             _ => stats.charts_direct += 1,
         }
     }
-    let PackInputs {
-        triangles: chart_triangles,
-        area_m2: chart_area_m2,
-        degenerate,
-    } = pack_inputs(mesh, &parameterized)?;
-    let packed: Vec<usize> = (0..charts.len()).filter(|&i| !degenerate[i]).collect();
-    let packing = match packing_of_cut_step {
-        // The cut step packed exactly these charts already (same inputs, deterministic).
-        Some(p) => {
-            check(
-                progress.advance(Stage::Pack, packed.len(), packed.len()),
-                Stage::Pack,
-            )?;
-            p
+    // Pack and write the `f32` corner UVs, then the last line of defence (`uv_guard.rs`):
+    // faults the guard cannot repair in place are split off into charts of their own and the
+    // charts packed again, at most `GUARD_SPLIT_ROUNDS` times.
+    let mut parameterized = parameterized;
+    let mut packing_of_cut_step = packing_of_cut_step;
+    let mut round = 0;
+    let (written, charts) = loop {
+        let mut written = pack_and_write(
+            mesh,
+            &parameterized,
+            packing_of_cut_step.take(),
+            options,
+            progress,
+        )?;
+        let outcome = guard_uvs(mesh, &mut written.corner_uvs, &written.face_page);
+        stats.uv_collapsed_faces += outcome.collapsed_faces;
+        stats.uv_nudged_vertices += outcome.nudged_vertices;
+        if outcome.unrepaired.is_empty() || round == GUARD_SPLIT_ROUNDS {
+            break (written, parameterized.segmentation.charts);
         }
-        None => {
-            let pack_input =
-                pack_charts_of(&parameterized, &packed, &chart_triangles, &chart_area_m2);
-            pack_charts(
-                &pack_input,
-                &options.pack,
-                &mut StageProgress::new(Stage::Pack, progress),
-            )?
-        }
+        stats.uv_guard_splits += outcome.unrepaired.len();
+        parameterized = split_off_faces(mesh, &parameterized, &outcome.unrepaired, options)?;
+        round += 1;
     };
+    let Written {
+        corner_uvs,
+        face_page,
+        chart_page,
+        packing,
+        degenerate_charts,
+    } = written;
     stats.texels_per_unit = packing.texels_per_unit;
     stats.pack_trials = packing.trials;
-    stats.degenerate_charts = charts.len() - packed.len();
-    let mut corner_uvs = vec![[[0.0f32; 2]; 3]; mesh.num_faces()];
+    stats.degenerate_charts = degenerate_charts;
     let mut face_chart = vec![0u32; mesh.num_faces()];
-    let mut face_page = vec![0u32; mesh.num_faces()];
-    let mut chart_page = vec![0u32; charts.len()];
-    for (placed, &i) in packing.charts.iter().zip(&packed) {
-        chart_page[i] = placed.page;
-        for (&f, t) in charts[i].iter().zip(&chart_triangles[i]) {
-            corner_uvs[f.index()] = t.map(|l| {
-                let p = placed.uv[l as usize];
-                [p[0] as f32, p[1] as f32]
-            });
-            face_page[f.index()] = placed.page;
-        }
-    }
     for (i, faces) in charts.iter().enumerate() {
         for &f in faces {
             face_chart[f.index()] = i as u32;
         }
     }
-    place_degenerate(
-        mesh,
-        charts,
-        &degenerate,
-        &mut corner_uvs,
-        &mut face_page,
-        &mut chart_page,
-    );
     progress.stage_finished(Stage::Pack);
 
     // 4. Measure.
@@ -277,5 +279,84 @@ pub fn generate(
         num_pages: packing.num_pages,
         stats,
         report,
+    })
+}
+
+/// Splits of the last line of defence (`uv_guard.rs`) before the pipeline gives up and lets
+/// the report show what is left. One round always suffices in practice (a single-face chart
+/// cannot be flipped); the bound only caps the cost of a pathological input.
+const GUARD_SPLIT_ROUNDS: usize = 2;
+
+/// The written UVs of one packing.
+struct Written {
+    corner_uvs: Vec<[[f32; 2]; 3]>,
+    face_page: Vec<u32>,
+    chart_page: Vec<u32>,
+    packing: pack::Packing,
+    degenerate_charts: usize,
+}
+
+/// Packs the charts of `parameterized` (or takes `packing`, the packing of exactly these charts
+/// by the packing-aware cuts) and writes each face's `f32` corner UVs and page; charts made
+/// only of degenerate faces are not packed and get their UVs from `place_degenerate`.
+fn pack_and_write(
+    mesh: &TriangleMesh,
+    parameterized: &parameterize::ParameterizedCharts,
+    packing: Option<pack::Packing>,
+    options: &AtlasOptions,
+    progress: &mut dyn Progress,
+) -> Result<Written, AtlasError> {
+    let charts = &parameterized.segmentation.charts;
+    let PackInputs {
+        triangles: chart_triangles,
+        area_m2: chart_area_m2,
+        degenerate,
+    } = pack_inputs(mesh, parameterized)?;
+    let packed: Vec<usize> = (0..charts.len()).filter(|&i| !degenerate[i]).collect();
+    let packing = match packing {
+        // The cut step packed exactly these charts already (same inputs, deterministic).
+        Some(p) => {
+            if progress.advance(Stage::Pack, packed.len(), packed.len()) == ControlFlow::Break(()) {
+                return Err(AtlasError::Cancelled { stage: Stage::Pack });
+            }
+            p
+        }
+        None => {
+            let pack_input =
+                pack_charts_of(parameterized, &packed, &chart_triangles, &chart_area_m2);
+            pack_charts(
+                &pack_input,
+                &options.pack,
+                &mut StageProgress::new(Stage::Pack, progress),
+            )?
+        }
+    };
+    let mut corner_uvs = vec![[[0.0f32; 2]; 3]; mesh.num_faces()];
+    let mut face_page = vec![0u32; mesh.num_faces()];
+    let mut chart_page = vec![0u32; charts.len()];
+    for (placed, &i) in packing.charts.iter().zip(&packed) {
+        chart_page[i] = placed.page;
+        for (&f, t) in charts[i].iter().zip(&chart_triangles[i]) {
+            corner_uvs[f.index()] = t.map(|l| {
+                let p = placed.uv[l as usize];
+                [p[0] as f32, p[1] as f32]
+            });
+            face_page[f.index()] = placed.page;
+        }
+    }
+    place_degenerate(
+        mesh,
+        charts,
+        &degenerate,
+        &mut corner_uvs,
+        &mut face_page,
+        &mut chart_page,
+    );
+    Ok(Written {
+        corner_uvs,
+        face_page,
+        chart_page,
+        degenerate_charts: charts.len() - packed.len(),
+        packing,
     })
 }

@@ -22,6 +22,7 @@ mod mesh_api;
 mod pack_box;
 mod param_oracles;
 mod pipeline;
+mod pipeline_flips;
 
 // Figures printed (not asserted) next to the stage guarantees they assert; run one alone for
 // its figures, in release, e.g. `cargo test --release --test it -- pack_bench:: --nocapture`.

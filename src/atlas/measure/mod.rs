@@ -488,6 +488,86 @@ pub fn measure_atlas(input: &MeasureInput<'_>) -> AtlasReport {
     report
 }
 
+/// Per chart, the sequential sum of `A2` over its non-UV-degenerate faces in face order (as
+/// the evaluator's `bincount`: a chart whose front and back cancel, a closed surface projected
+/// flat, has a signed area near 0, and its sign must come out the same) and its orientation
+/// (positive when the sum is ≥ 0).
+fn chart_orientation(
+    geo: &geometry::FaceGeometry,
+    chart_of_face: &[u32],
+    num_charts: usize,
+) -> (Vec<f64>, Vec<bool>) {
+    let mut chart_signed = vec![0.0f64; num_charts];
+    for (f, &c) in chart_of_face.iter().enumerate() {
+        if !geo.uv_degenerate[f] {
+            chart_signed[c as usize] += geo.signed_uv_area[f];
+        }
+    }
+    let positive = chart_signed.iter().map(|&s| s >= 0.0).collect();
+    (chart_signed, positive)
+}
+
+/// The report's flip rule: `f` is not UV-degenerate and the sign of its `A2` differs from its
+/// chart's orientation.
+fn is_flipped(
+    geo: &geometry::FaceGeometry,
+    chart_of_face: &[u32],
+    chart_positive: &[bool],
+    f: usize,
+) -> bool {
+    !geo.uv_degenerate[f]
+        && (geo.signed_uv_area[f] > 0.0) != chart_positive[chart_of_face[f] as usize]
+}
+
+/// What the report would say about the orientation of each face of final corner UVs: the
+/// pipeline's last line of defence (`uv_guard.rs`) checks its output with the very rules of
+/// the report (module doc: "Degenerate", "Charts", "Flips"), so that both agree.
+pub(crate) struct OrientationCheck {
+    /// `A2` of each face (page units², the `f32` corners widened exactly).
+    pub signed_uv_area: Vec<f64>,
+    /// UV-degenerate, per face.
+    pub uv_degenerate: Vec<bool>,
+    /// 3-D-degenerate, per face.
+    pub degenerate_3d: Vec<bool>,
+    /// The chart of each face, recomputed from the output.
+    pub chart_of_face: Vec<u32>,
+    /// Orientation of each chart (positive when its signed area is ≥ 0).
+    pub chart_positive: Vec<bool>,
+}
+
+impl OrientationCheck {
+    /// Counted in `flipped` by the report.
+    pub fn flipped(&self, f: usize) -> bool {
+        !self.uv_degenerate[f]
+            && (self.signed_uv_area[f] > 0.0) != self.chart_positive[self.chart_of_face[f] as usize]
+    }
+    /// A fault for the guard: flipped, UV-degenerate with 3-D area (counted in
+    /// `degenerate_uv_with_3d_area`), or 3-D-degenerate with UV area (it covers texels for
+    /// nothing and can overlap its neighbours).
+    pub fn fault(&self, f: usize) -> bool {
+        self.flipped(f) || self.uv_degenerate[f] != self.degenerate_3d[f]
+    }
+}
+
+/// [`OrientationCheck`] of `corner_uvs` (same preconditions as [`MeasureInput`]). Cost: the
+/// geometry and connectivity passes of [`measure_atlas`], O(faces).
+pub(crate) fn orientation_check(
+    mesh: &TriangleMesh,
+    corner_uvs: &[[[f32; 2]; 3]],
+    face_page: &[u32],
+) -> OrientationCheck {
+    let geo = geometry::face_geometry(mesh, corner_uvs);
+    let con = charts::connectivity(mesh, corner_uvs, face_page, &geo.edge_len_m);
+    let (_, chart_positive) = chart_orientation(&geo, &con.chart_of_face, con.num_charts);
+    OrientationCheck {
+        signed_uv_area: geo.signed_uv_area,
+        uv_degenerate: geo.uv_degenerate,
+        degenerate_3d: geo.degenerate_3d,
+        chart_of_face: con.chart_of_face,
+        chart_positive,
+    }
+}
+
 /// Everything [`measure_atlas`] measures but the exact overlaps, and the chart of each face.
 fn measure_without_exact_overlaps(input: &MeasureInput<'_>) -> (AtlasReport, Vec<u32>) {
     let mesh = input.mesh;
@@ -507,10 +587,6 @@ fn measure_without_exact_overlaps(input: &MeasureInput<'_>) -> (AtlasReport, Vec
     // Counts, areas, orientation.
     let mut area_3d = Vec::with_capacity(nf);
     let mut uv_area = Vec::with_capacity(nf);
-    // Plain sequential sums in face order, as the evaluator's `bincount`: a chart whose front
-    // and back cancel (a closed surface projected flat) has a signed area near 0, and its sign
-    // must come out the same.
-    let mut chart_signed = vec![0.0f64; con.num_charts];
     for f in 0..nf {
         let (deg2, deg3) = (geo.uv_degenerate[f], geo.degenerate_3d[f]);
         report.degenerate += usize::from(deg2);
@@ -524,20 +600,15 @@ fn measure_without_exact_overlaps(input: &MeasureInput<'_>) -> (AtlasReport, Vec
         } else {
             geo.signed_uv_area[f].abs()
         });
-        if !deg2 {
-            chart_signed[con.chart_of_face[f] as usize] += geo.signed_uv_area[f];
-        }
     }
     report.area_3d_m2 = numpy::np_sum(&area_3d);
     report.uv_area = numpy::np_sum(&uv_area);
     drop((area_3d, uv_area));
-    let chart_positive: Vec<bool> = chart_signed.iter().map(|&s| s >= 0.0).collect();
-    for f in 0..nf {
-        let a2 = geo.signed_uv_area[f];
-        if !geo.uv_degenerate[f] && (a2 > 0.0) != chart_positive[con.chart_of_face[f] as usize] {
-            report.flipped += 1;
-        }
-    }
+    let (chart_signed, chart_positive) =
+        chart_orientation(&geo, &con.chart_of_face, con.num_charts);
+    report.flipped = (0..nf)
+        .filter(|&f| is_flipped(&geo, &con.chart_of_face, &chart_positive, f))
+        .count();
     let signed_where = |positive: bool| -> Vec<f64> {
         chart_signed
             .iter()

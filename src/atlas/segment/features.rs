@@ -8,8 +8,9 @@
 //!    difference", [`TriangleMesh::dihedral_angle_rad`]). Boundary edges and edges next to a
 //!    zero-area face have no sharpness (0 here): they never start or carry a feature.
 //! 2. The threshold τ keeps a fraction of the edges: τ is the sharpness of the
-//!    `⌈feature_fraction · n⌉`-th sharpest of the `n` edges that have one. A flat mesh (τ = 0) has
-//!    no features.
+//!    `⌈feature_fraction · n⌉`-th sharpest of the `n` edges that have one. With τ = 0 (a flat mesh,
+//!    or a flat part whose creases are fewer than that fraction) Algorithm 1 keeps no curve;
+//!    the hard-edge pass still runs.
 //! 3. Every edge with sharpness ≥ τ, sharpest first (ties by edge id), not yet tagged, starts a
 //!    curve grown in both directions: from the curve's end, a depth-first search finds the string
 //!    `S` of at most `max_string_length` edges with the largest total sharpness, then the curve
@@ -198,7 +199,13 @@ pub fn detect_features(
     }
     ranked.truncate(end);
     ranked.sort_unstable_by(order);
+    // τ ≤ 0 (the sharpest share reaches flat edges: a flat part with a short crease) leaves
+    // Algorithm 1 nothing to grow, but the hard-edge pass below still runs.
     if tau.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        checkpoint(progress.advance(2, 2))?;
+        if let Some(angle) = options.hard_edge_angle_rad {
+            add_hard_edges(mesh, &mut out, angle);
+        }
         return Ok(out);
     }
     out.threshold_rad = Some(tau);

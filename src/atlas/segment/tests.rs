@@ -637,3 +637,31 @@ fn cancelling_during_segmentation_stops_it() {
         })
     );
 }
+
+#[test]
+fn hard_edges_are_found_when_the_feature_threshold_is_zero() {
+    // A 10 × 4 grid folded by 90° along x = 5: 4 crease edges among ~106 interior edges, so
+    // the sharpest 5 % (6 edges) reach the flat ones and τ = 0. Algorithm 1 has nothing to
+    // grow, but the crease is a chain of 4 right-angle edges: hard edges all the same.
+    let mut input = fixtures::grid(10, 4);
+    for p in &mut input.positions_m {
+        if p[0] > 5.0 {
+            *p = [5.0, p[1], p[0] - 5.0];
+        }
+    }
+    let mesh = build(&input);
+    let feats = detect_features(
+        &mesh,
+        &Lscm2002Options::default(),
+        &mut StageProgress::ignored(Stage::Segment),
+    )
+    .expect("never cancelled");
+    assert_eq!(feats.threshold_rad, None, "τ = 0: no curve threshold");
+    let crease: Vec<HalfedgeId> = mesh
+        .edges()
+        .filter(|&h| mesh.dihedral_angle_rad(h).is_some_and(|a| a > 1.0))
+        .collect();
+    assert_eq!(crease.len(), 4);
+    assert_eq!(feats.hard_edges, crease, "every crease edge is hard");
+    assert!(crease.iter().all(|&h| feats.is_hard_edge(h)));
+}

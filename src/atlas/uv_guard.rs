@@ -1,0 +1,418 @@
+//! The flip promise's last line of defence: the final `f32` corner UVs have no flipped face and
+//! no face that is degenerate in UV but not in 3-D (or the other way round).
+//!
+//! # Purpose
+//! Every stage before this one works in `f64` and validates its own maps, yet the written UVs
+//! can still break the promise, for three measured reasons (issue 22, corpus `hard/`):
+//! - a zero-area face (collinear corners) whose corners are all mapped by its non-degenerate
+//!   neighbours keeps their UVs, which need not be collinear: its UV triangle has area, either
+//!   orientation, and can cover its neighbours' texels (alien: 1 flip, 45 overlapping texels);
+//! - a zero-area face whose lone vertex was put on its UV segment (parameterize/degenerate.rs)
+//!   is collinear in `f64` but not after rounding to `f32`: a UV area of ~1e-8 of its edge²,
+//!   of either sign (alien, craft_speederD: 4 flips);
+//! - a 3-D sliver (height ~1e-8 of its length) whose `f64` map is valid but whose UV height is
+//!   below the `f32` spacing: rounding flips it (cakeBirthday: 1 flip).
+//!
+//! [`guard_uvs`] checks the UVs with the report's own rules (`measure::orientation_check`, the
+//! definitions of the report and the evaluator) and repairs, in this order:
+//! 1. **collapse:** a 3-D-degenerate face with UV area gets two equal corners (the corner
+//!    off its longest 3-D edge takes the UV of the nearer end of that edge): `A2` is exactly 0,
+//!    only that face changes, and its long edge stays shared with its neighbour;
+//! 2. **nudge:** for a flipped or UV-degenerate face with 3-D area, one of its UV vertices (all
+//!    the corners with its key: glTF mesh, position, page, UV) moves along the normal of the
+//!    opposite UV edge, towards its chart's orientation, by 1, 2, 4, … up to
+//!    [`NUDGE_MAX_ULPS`] `f32` spacings; the first move after which every face at that vertex is
+//!    non-degenerate and oriented as its chart is kept. A move of at most 256 spacings is below
+//!    1/60 texel at 4096 px, far inside the padding, so it cannot reach another chart. A face
+//!    whose UV corners all coincide (a triangle smaller than the `f32` spacing) first has one
+//!    corner moved off the others (along ±u or ±v, the other faces at it staying fine);
+//! 3. what is left is returned, for `generate` to split each such face off into a chart of its
+//!    own and pack again (a single-face chart is never flipped: its orientation is its own).
+//!
+//! # Invariants
+//! Pure and deterministic: faces and vertices are visited in index order; no hashing. Never
+//! moves a corner of a face that is not at fault or at a nudged vertex, so a valid atlas comes
+//! out bit-identical.
+//!
+//! # Units
+//! UVs in normalized page coordinates (`f32`, as written to the file); `A2` in page units².
+//!
+//! # References
+//! Sander, Snyder, Gortler, Hoppe 2001, "Texture mapping progressive meshes" §4 (vertex moves
+//! that keep every face of the one-ring oriented); the evaluator's definitions
+//! (`measure/mod.rs`, "Degenerate", "Charts", "Flips").
+use super::measure::{orientation_check, OrientationCheck};
+use crate::mesh::{FaceId, TriangleMesh};
+
+/// The largest nudge, in `f32` spacings at the vertex (2⁸: see the module doc).
+pub(super) const NUDGE_MAX_ULPS: u32 = 256;
+
+/// What [`guard_uvs`] did.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub(super) struct GuardOutcome {
+    /// 3-D-degenerate faces whose UV triangle was collapsed to a segment.
+    pub collapsed_faces: usize,
+    /// UV vertices moved by a nudge.
+    pub nudged_vertices: usize,
+    /// Faces still at fault (ascending): flipped, or UV-degenerate with 3-D area.
+    pub unrepaired: Vec<FaceId>,
+}
+
+/// Repairs `corner_uvs` in place (module doc) and returns what it did and what is left.
+/// `face_page[f]` is the page of face `f`; both have one entry per face of `mesh`.
+pub(super) fn guard_uvs(
+    mesh: &TriangleMesh,
+    corner_uvs: &mut [[[f32; 2]; 3]],
+    face_page: &[u32],
+) -> GuardOutcome {
+    let mut out = GuardOutcome::default();
+    let check = orientation_check(mesh, corner_uvs, face_page);
+    if !(0..corner_uvs.len()).any(|f| check.fault(f)) {
+        return out;
+    }
+    // 1. Collapse 3-D-degenerate faces with UV area (changes no other face).
+    let shared = if (0..corner_uvs.len()).any(|f| check.degenerate_3d[f] && !check.uv_degenerate[f])
+    {
+        SharedEdges::new(&UvVertices::new(mesh, corner_uvs, face_page))
+    } else {
+        SharedEdges::default()
+    };
+    out.collapsed_faces += collapse_all(mesh, &check.degenerate_3d, &shared, corner_uvs);
+    // 2. Nudge the faces with 3-D area at fault (charts recomputed after the collapses, which
+    //    can cut a chart).
+    let check = orientation_check(mesh, corner_uvs, face_page);
+    let faulty: Vec<usize> = (0..corner_uvs.len())
+        .filter(|&f| check.fault(f) && !check.degenerate_3d[f])
+        .collect();
+    if !faulty.is_empty() {
+        let vertices = UvVertices::new(mesh, corner_uvs, face_page);
+        for &f in &faulty {
+            if face_ok(&check, corner_uvs, f) {
+                continue; // repaired by an earlier nudge at a shared vertex
+            }
+            if (0..3).any(|k| nudge(&check, &vertices, corner_uvs, f, k)) {
+                out.nudged_vertices += 1;
+                continue;
+            }
+            // A face whose UV corners coincide (a triangle smaller than the `f32` spacing)
+            // has no opposite edge to move away from: separate one corner first.
+            for k in 0..3 {
+                if separate(&check, &vertices, corner_uvs, f, k)
+                    && (0..3).any(|j| nudge(&check, &vertices, corner_uvs, f, j))
+                {
+                    out.nudged_vertices += 2;
+                    break;
+                }
+            }
+        }
+    }
+    // A nudge moves the ends of a collapsed face's long edge but not its third corner, which
+    // has a key of its own: collapse again (a no-op where nothing moved).
+    collapse_all(mesh, &check.degenerate_3d, &shared, corner_uvs);
+    // 3. What is left, by the report's rules.
+    let check = orientation_check(mesh, corner_uvs, face_page);
+    out.unrepaired = (0..corner_uvs.len())
+        .filter(|&f| check.fault(f))
+        .map(|f| FaceId(f as u32))
+        .collect();
+    out
+}
+
+/// Collapses every face marked in `degenerate_3d` whose UV triangle has area; returns how many.
+fn collapse_all(
+    mesh: &TriangleMesh,
+    degenerate_3d: &[bool],
+    shared: &SharedEdges,
+    corner_uvs: &mut [[[f32; 2]; 3]],
+) -> usize {
+    let mut n = 0;
+    for (f, uv) in corner_uvs.iter_mut().enumerate() {
+        if degenerate_3d[f] && !signed_area(uv).1 {
+            collapse(mesh, f, shared, uv);
+            n += 1;
+        }
+    }
+    n
+}
+
+/// Two equal corners for the 3-D-degenerate face `f`: it keeps one edge, the longest (in 3-D)
+/// of those another face shares in the output (so that the face stays in its chart), or else
+/// its longest edge; the third corner takes the UV of the nearer (in 3-D) end of that edge.
+/// `A2` is then exactly 0.
+fn collapse(mesh: &TriangleMesh, f: usize, shared: &SharedEdges, uv: &mut [[f32; 2]; 3]) {
+    let p = mesh.face_positions(FaceId(f as u32));
+    let d2 = |a: usize, b: usize| -> f64 { (0..3).map(|i| (p[a][i] - p[b][i]).powi(2)).sum() };
+    // Edge k joins corners k and k+1; the corner off it is k+2. Ties to the lowest k.
+    let rank = |k: usize| (shared.is_shared(f, k), d2(k, (k + 1) % 3));
+    let k = (0..3)
+        .max_by(|&a, &b| {
+            let (ra, rb) = (rank(a), rank(b));
+            ra.0.cmp(&rb.0).then(ra.1.total_cmp(&rb.1)).then(b.cmp(&a))
+        })
+        .unwrap_or(0);
+    let (a, b, c) = (k, (k + 1) % 3, (k + 2) % 3);
+    uv[c] = if d2(c, a) <= d2(c, b) { uv[a] } else { uv[b] };
+}
+
+/// Which half-edges of the output share their (unordered) pair of UV vertices with another
+/// half-edge: the edges inside a chart.
+#[derive(Default)]
+struct SharedEdges {
+    /// Per half-edge `3f + k`: shared.
+    shared: Vec<bool>,
+}
+
+impl SharedEdges {
+    fn new(v: &UvVertices) -> Self {
+        let n = v.group_of_corner.len();
+        let pair = |h: usize| {
+            let (f, k) = (h / 3, h % 3);
+            let a = v.group_of_corner[3 * f + k];
+            let b = v.group_of_corner[3 * f + (k + 1) % 3];
+            (a.min(b), a.max(b))
+        };
+        let mut pairs: Vec<(u32, u32)> = (0..n).map(pair).collect();
+        pairs.sort_unstable();
+        let shared = (0..n)
+            .map(|h| {
+                let p = pair(h);
+                let lo = pairs.partition_point(|&q| q < p);
+                pairs.get(lo + 1) == Some(&p)
+            })
+            .collect();
+        Self { shared }
+    }
+
+    fn is_shared(&self, f: usize, k: usize) -> bool {
+        self.shared.get(3 * f + k).copied().unwrap_or(false)
+    }
+}
+
+/// The corners of the output grouped by key (glTF mesh, 3-D position, page, UV bits with
+/// `-0.0 == 0.0`): a nudge moves a whole group, so the output's connectivity is unchanged.
+struct UvVertices {
+    /// Group of corner `3f + k`.
+    group_of_corner: Vec<u32>,
+    /// Corners of each group: `corners[start[g]..start[g + 1]]`, ascending.
+    start: Vec<u32>,
+    corners: Vec<u32>,
+}
+
+impl UvVertices {
+    fn new(mesh: &TriangleMesh, corner_uvs: &[[[f32; 2]; 3]], face_page: &[u32]) -> Self {
+        let fold64 = |x: f64| if x == 0.0 { 0 } else { x.to_bits() };
+        let fold32 = |x: f32| if x == 0.0 { 0 } else { x.to_bits() };
+        type Key = (u32, [u64; 3], u32, [u32; 2]);
+        let mut keyed: Vec<(Key, u32)> = Vec::with_capacity(3 * corner_uvs.len());
+        for (f, uv) in corner_uvs.iter().enumerate() {
+            let vs = mesh.face_vertices(FaceId(f as u32));
+            for k in 0..3 {
+                let p = mesh.position(vs[k]);
+                keyed.push((
+                    (
+                        mesh.vertex_weld_group(vs[k]),
+                        p.map(fold64),
+                        face_page[f],
+                        uv[k].map(fold32),
+                    ),
+                    (3 * f + k) as u32,
+                ));
+            }
+        }
+        keyed.sort_unstable();
+        let mut group_of_corner = vec![0u32; keyed.len()];
+        let mut start = Vec::new();
+        let mut corners = Vec::with_capacity(keyed.len());
+        for (i, (key, c)) in keyed.iter().enumerate() {
+            if i == 0 || keyed[i - 1].0 != *key {
+                start.push(i as u32);
+            }
+            group_of_corner[*c as usize] = (start.len() - 1) as u32;
+            corners.push(*c);
+        }
+        start.push(keyed.len() as u32);
+        Self {
+            group_of_corner,
+            start,
+            corners,
+        }
+    }
+
+    fn group(&self, corner: usize) -> &[u32] {
+        let g = self.group_of_corner[corner] as usize;
+        &self.corners[self.start[g] as usize..self.start[g + 1] as usize]
+    }
+}
+
+/// `A2` and the report's UV-degeneracy of one UV triangle, with the formulas of
+/// `measure/geometry.rs` (same operation order, so the same decisions).
+fn signed_area(uv: &[[f32; 2]; 3]) -> (f64, bool) {
+    let w = uv.map(|c| c.map(f64::from));
+    let (ds1, dt1) = (w[1][0] - w[0][0], w[1][1] - w[0][1]);
+    let (ds2, dt2) = (w[2][0] - w[0][0], w[2][1] - w[0][1]);
+    let a2 = 0.5 * (ds1 * dt2 - ds2 * dt1);
+    let l = ds1
+        .hypot(dt1)
+        .max(ds2.hypot(dt2))
+        .max((w[2][0] - w[1][0]).hypot(w[2][1] - w[1][1]));
+    let tol = 1e-12 * l * l;
+    let degenerate = a2.abs().partial_cmp(&tol) != Some(std::cmp::Ordering::Greater);
+    (a2, degenerate)
+}
+
+/// Face `f` (with 3-D area) is non-degenerate in UV and oriented as its chart was.
+fn face_ok(check: &OrientationCheck, corner_uvs: &[[[f32; 2]; 3]], f: usize) -> bool {
+    let (a2, degenerate) = signed_area(&corner_uvs[f]);
+    !degenerate && (a2 > 0.0) == check.chart_positive[check.chart_of_face[f] as usize]
+}
+
+/// Moves the UV vertex at corner `k` of face `f` off the UV of the face's other corners, by
+/// 1, 2, 4, … [`NUDGE_MAX_ULPS`] `f32` spacings along +u, −u, +v or −v (the first move after
+/// which every other face at that vertex is still fine); returns whether one was made.
+fn separate(
+    check: &OrientationCheck,
+    vertices: &UvVertices,
+    corner_uvs: &mut [[[f32; 2]; 3]],
+    f: usize,
+    k: usize,
+) -> bool {
+    let c = corner_uvs[f][k];
+    let group = vertices.group(3 * f + k);
+    for dir in [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]] {
+        let mut steps = 1u32;
+        while steps <= NUDGE_MAX_ULPS {
+            let moved = step(c, dir, steps);
+            steps *= 2;
+            let uv = corner_uvs[f];
+            if moved == c
+                || moved == uv[(k + 1) % 3]
+                || moved == uv[(k + 2) % 3]
+                || !moved.iter().all(|x| x.is_finite())
+            {
+                continue;
+            }
+            if moves_fine(check, group, corner_uvs, moved, f) {
+                for &corner in group {
+                    corner_uvs[corner as usize / 3][corner as usize % 3] = moved;
+                }
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// `c` moved by `steps` `f32` spacings (the larger of its two coordinates') along `dir`.
+fn step(c: [f32; 2], dir: [f64; 2], steps: u32) -> [f32; 2] {
+    let spacing = |x: f32| -> f64 {
+        let x = x.abs().max(f32::MIN_POSITIVE);
+        f64::from(f32::from_bits(x.to_bits() + 1) - x)
+    };
+    let d = spacing(c[0]).max(spacing(c[1])) * f64::from(steps);
+    [
+        (f64::from(c[0]) + d * dir[0]) as f32,
+        (f64::from(c[1]) + d * dir[1]) as f32,
+    ]
+}
+
+/// Whether every face at the UV vertex `group` but `except` (3-D-degenerate ones excepted) is
+/// non-degenerate and oriented as its chart with the vertex at `moved`.
+fn moves_fine(
+    check: &OrientationCheck,
+    group: &[u32],
+    corner_uvs: &[[[f32; 2]; 3]],
+    moved: [f32; 2],
+    except: usize,
+) -> bool {
+    group.iter().all(|&corner| {
+        let (g, j) = (corner as usize / 3, corner as usize % 3);
+        if g == except || check.degenerate_3d[g] {
+            return true;
+        }
+        let mut t = corner_uvs[g];
+        t[j] = moved;
+        let (a2, degenerate) = signed_area(&t);
+        !degenerate && (a2 > 0.0) == check.chart_positive[check.chart_of_face[g] as usize]
+    })
+}
+
+/// Tries to repair face `f` by moving its UV vertex at corner `k` (module doc, step 2). Keeps
+/// the first move after which every face at that vertex is fine (3-D-degenerate ones excepted:
+/// they keep two equal corners or were fine); returns whether one was kept.
+fn nudge(
+    check: &OrientationCheck,
+    vertices: &UvVertices,
+    corner_uvs: &mut [[[f32; 2]; 3]],
+    f: usize,
+    k: usize,
+) -> bool {
+    let positive = check.chart_positive[check.chart_of_face[f] as usize];
+    let uv = corner_uvs[f];
+    let (a, b, c) = (uv[(k + 1) % 3], uv[(k + 2) % 3], uv[k]);
+    // A2 = ½ (b − a) × (c − a): its gradient in c is ½ (−e_v, e_u) with e = b − a.
+    let e = [
+        f64::from(b[0]) - f64::from(a[0]),
+        f64::from(b[1]) - f64::from(a[1]),
+    ];
+    let len = e[0].hypot(e[1]);
+    if len.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return false;
+    }
+    let sign = if positive { 1.0 } else { -1.0 };
+    let n = [-e[1] / len * sign, e[0] / len * sign];
+    let group = vertices.group(3 * f + k);
+    let mut steps = 1u32;
+    while steps <= NUDGE_MAX_ULPS {
+        let moved = step(c, n, steps);
+        steps *= 2;
+        if moved == c || !moved.iter().all(|x| x.is_finite()) {
+            continue;
+        }
+        if moves_fine(check, group, corner_uvs, moved, usize::MAX) {
+            for &corner in group {
+                corner_uvs[corner as usize / 3][corner as usize % 3] = moved;
+            }
+            return true;
+        }
+    }
+    false
+}
+
+/// `validated` with each face of `faults` (ascending) split off its chart into a chart of its
+/// own, the rest of that chart cut into disks (`segment::enforce_disks`), validated again
+/// without merge-back (so the single faces stay apart). Step 3 of the module doc; the caller
+/// packs again.
+pub(super) fn split_off_faces(
+    mesh: &TriangleMesh,
+    validated: &super::parameterize::ParameterizedCharts,
+    faults: &[FaceId],
+    options: &super::AtlasOptions,
+) -> Result<super::parameterize::ParameterizedCharts, super::AtlasError> {
+    use super::progress::{Stage, StageProgress};
+    use super::{parameterize, segment};
+    let charts = &validated.segmentation.charts;
+    let mut stats = validated.segmentation.stats;
+    let mut proposed: Vec<Vec<FaceId>> = Vec::with_capacity(charts.len() + faults.len());
+    for faces in charts {
+        if !faces.iter().any(|f| faults.binary_search(f).is_ok()) {
+            proposed.push(faces.clone());
+            continue;
+        }
+        let (alone, rest): (Vec<FaceId>, Vec<FaceId>) =
+            faces.iter().partition(|f| faults.binary_search(f).is_ok());
+        proposed.extend(alone.into_iter().map(|f| vec![f]));
+        if !rest.is_empty() {
+            proposed.extend(segment::enforce_disks(mesh, vec![rest], &mut stats));
+        }
+    }
+    let seg = segment::finish(mesh, proposed, stats);
+    Ok(parameterize::parameterize_charts(
+        mesh,
+        &seg,
+        &parameterize::ParameterizeOptions {
+            merge_passes: 0,
+            ..options.parameterize
+        },
+        &mut StageProgress::ignored(Stage::Parameterize),
+    )?)
+}
