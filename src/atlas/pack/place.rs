@@ -39,7 +39,7 @@
 use super::hull::{convex_hull, diameter, min_area_box};
 use super::outline::{boundary_chain, outline_triangles};
 use super::raster::{
-    fill_chain, rasterize_centres, rasterize_conservative, rasterize_touching, Mask,
+    fill_chain_with_core, rasterize_centres, rasterize_conservative, rasterize_touching, Mask,
 };
 use super::types::{PackChart, PackError};
 
@@ -528,7 +528,9 @@ fn orient(
         .iter()
         .map(|e| e.map(|i| local[i as usize]))
         .collect();
-    let filled = fill_chain(&mut mask, &edges, CENTRE_GROW_TEXELS);
+    // `core`: a centre inside the well-shaped triangles by more than the grow, which the
+    // chart covers exactly, also after rounding (the footprint's exactness below).
+    let (filled, core) = fill_chain_with_core(&mut mask, &edges, CENTRE_GROW_TEXELS);
     let loose = rasterize_centres(
         &mut mask,
         prep.loose
@@ -557,6 +559,14 @@ fn orient(
         // meet — a touched texel of A within ⌊p/2⌋ of `L_A` and one of B within ⌊p/2⌋ of `L_B`
         // would put `L_A` and `L_B` within `p`. For ordinary charts `T ⊆ dilate(L, 1)` and
         // nothing changes when `p ≥ 2`.
+        //
+        // Unless no texel centre is known to be covered by more than the grow (`core` false,
+        // see `fill_chain_with_core`): the chart may only come within the grow of centres,
+        // and cover none at all, exactly or after rounding. The contract gives such a chart its conservative footprint (every
+        // texel touched), so `M = L ∪ T`; leaving out its touched texels next to `L` put it
+        // one texel short of the padding (issue 21's property tests,
+        // `tiny_charts_keep_the_full_padding`). A chart with a core centre covers it in the
+        // output too, and is checked by its sampled texels, a subset of `L`.
         let mut touched = Mask::new(mask.width(), mask.height());
         rasterize_touching(
             &mut touched,
@@ -567,7 +577,11 @@ fn orient(
             ),
             CENTRE_GROW_TEXELS,
         );
-        let near = mask.dilate(padding_texels / 2);
+        let near = if core {
+            mask.dilate(padding_texels / 2)
+        } else {
+            Mask::new(mask.width(), mask.height())
+        };
         mask.add_except(&touched, &near);
     }
     if chart.triangles.is_empty() {
@@ -663,6 +677,7 @@ fn bounds(points: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::atlas::pack::raster::fill_chain;
     use crate::mesh::vector::orient2;
 
     #[test]

@@ -514,10 +514,34 @@ pub fn rasterize_centres(
 ///
 /// Returns whether it marked anything. Cost: O(Σ rows spanned per edge + crossings · log).
 pub fn fill_chain(mask: &mut Mask, edges: &[[[f64; 2]; 2]], band_texels: f64) -> bool {
+    fill_chain_with_core(mask, edges, band_texels).0
+}
+
+/// How many texel centres [`fill_chain_with_core`] tests for a core centre at most.
+pub const CORE_CANDIDATES: usize = 16;
+
+/// [`fill_chain`], and whether it found a *core* centre: a marked centre of nonzero winding
+/// number farther than `band_texels` (Euclidean) from every edge, so inside the union by more
+/// than the band — moving the chain by less than that (rounding, the `f32` of written UVs)
+/// keeps it covered. Its winding number is exact (rounding of the crossings only matters
+/// within rounding of an edge). The candidates are the middle centres of the
+/// [`CORE_CANDIDATES`] longest runs of the fill (ties by row, then column), each tested
+/// against every edge: `false` when none of them is a core centre, which may miss one
+/// (callers treat `false` conservatively).
+///
+/// Returns `(marked anything, found a core centre)`. Cost: that of [`fill_chain`] plus
+/// O([`CORE_CANDIDATES`] × edges).
+pub fn fill_chain_with_core(
+    mask: &mut Mask,
+    edges: &[[[f64; 2]; 2]],
+    band_texels: f64,
+) -> (bool, bool) {
     let mut any = false;
     if mask.width() == 0 || mask.height() == 0 || edges.is_empty() {
-        return any;
+        return (any, false);
     }
+    // The runs of nonzero winding, `(row, first, last)`.
+    let mut runs: Vec<(u32, u32, u32)> = Vec::new();
     let (w, h) = (i64::from(mask.width()), i64::from(mask.height()));
     let e = band_texels.max(0.0);
     // Crossings per row: (row, x, +1 / -1), sorted by row then x.
@@ -572,6 +596,9 @@ pub fn fill_chain(mask: &mut Mask, edges: &[[[f64; 2]; 2]], band_texels: f64) ->
         };
         if i0 <= i1 {
             mask.set_span(row, i0 as u32, i1 as u32);
+            if xb.is_finite() {
+                runs.push((row, i0 as u32, i1 as u32));
+            }
             any = true;
         }
     };
@@ -596,7 +623,26 @@ pub fn fill_chain(mask: &mut Mask, edges: &[[[f64; 2]; 2]], band_texels: f64) ->
             emit(mask, row, start, f64::INFINITY);
         }
     }
-    any
+    runs.sort_by_key(|&(row, a, b)| (std::cmp::Reverse(b - a), row, a));
+    let far = |c: [f64; 2]| {
+        edges.iter().all(|&[p, q]| {
+            let d = [q[0] - p[0], q[1] - p[1]];
+            let len2 = d[0] * d[0] + d[1] * d[1];
+            let t = if len2 > 0.0 {
+                (((c[0] - p[0]) * d[0] + (c[1] - p[1]) * d[1]) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let (dx, dy) = (c[0] - p[0] - t * d[0], c[1] - p[1] - t * d[1]);
+            // NaN (non-finite edges, skipped by the fill) counts as near.
+            dx * dx + dy * dy > e * e
+        })
+    };
+    let core = runs
+        .iter()
+        .take(CORE_CANDIDATES)
+        .any(|&(row, a, b)| far([f64::from(a + (b - a) / 2) + 0.5, f64::from(row) + 0.5]));
+    (any, core)
 }
 
 /// `floor` as an integer for |x| < 2^62, without a libm call.
