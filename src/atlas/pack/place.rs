@@ -315,7 +315,8 @@ pub struct FootprintBits {
 impl FootprintBits {
     /// Calls `f(row, first, last)` for every run of set texels of the turned window (inclusive
     /// columns, grid coordinates), row by row. Cost: O(window area / 64 + runs) unturned or
-    /// half-turned, O(window area) for the odd quarter turns (they transpose the bits).
+    /// half-turned; the odd quarter turns first transpose the bits by 64 × 64 blocks
+    /// ([`Mask::transposed_window`], O(window area / 64 × 6)).
     pub fn for_each_run(&self, mut f: impl FnMut(u32, u32, u32)) {
         let [ox, oy] = self.origin;
         let [w, h] = self.size;
@@ -335,21 +336,19 @@ impl FootprintBits {
             _ => {
                 // Odd turns: the turned grid is h wide and w tall; its row i is the window's
                 // column i (turn 1: column x = h - 1 - j; turn 3: row w - 1 - i, column j).
-                let mut t = Mask::new(h, w);
-                for j in 0..h {
-                    for (a, b) in self.mask.runs_in(oy + j, ox, ox + w) {
-                        for i in a - ox..=b - ox {
-                            if self.turns == 1 {
-                                t.set_span(i, h - 1 - j, h - 1 - j);
-                            } else {
-                                t.set_span(w - 1 - i, j, j);
-                            }
+                // `t` is the window transposed (row i = column i, column j = row j).
+                let t = self.mask.transposed_window(ox, oy, w, h);
+                if self.turns == 1 {
+                    for i in 0..w {
+                        for (a, b) in t.runs_in(i, 0, h).into_iter().rev() {
+                            f(i, h - 1 - b, h - 1 - a);
                         }
                     }
-                }
-                for i in 0..w {
-                    for (a, b) in t.runs_in(i, 0, h) {
-                        f(i, a, b);
+                } else {
+                    for i in 0..w {
+                        for (a, b) in t.runs_in(w - 1 - i, 0, h) {
+                            f(i, a, b);
+                        }
                     }
                 }
             }
