@@ -39,7 +39,7 @@
 use super::hull::{convex_hull, diameter, min_area_box};
 use super::outline::{boundary_chain, outline_triangles};
 use super::raster::{
-    fill_chain, rasterize_centres, rasterize_conservative, rasterize_touching, Mask,
+    fill_chain_with_core, rasterize_centres, rasterize_conservative, rasterize_touching, Mask,
 };
 use super::types::{PackChart, PackError};
 
@@ -315,7 +315,8 @@ pub struct FootprintBits {
 impl FootprintBits {
     /// Calls `f(row, first, last)` for every run of set texels of the turned window (inclusive
     /// columns, grid coordinates), row by row. Cost: O(window area / 64 + runs) unturned or
-    /// half-turned, O(window area) for the odd quarter turns (they transpose the bits).
+    /// half-turned; the odd quarter turns first transpose the bits by 64 × 64 blocks
+    /// ([`Mask::transposed_window`], O(window area / 64 × 6)).
     pub fn for_each_run(&self, mut f: impl FnMut(u32, u32, u32)) {
         let [ox, oy] = self.origin;
         let [w, h] = self.size;
@@ -335,21 +336,19 @@ impl FootprintBits {
             _ => {
                 // Odd turns: the turned grid is h wide and w tall; its row i is the window's
                 // column i (turn 1: column x = h - 1 - j; turn 3: row w - 1 - i, column j).
-                let mut t = Mask::new(h, w);
-                for j in 0..h {
-                    for (a, b) in self.mask.runs_in(oy + j, ox, ox + w) {
-                        for i in a - ox..=b - ox {
-                            if self.turns == 1 {
-                                t.set_span(i, h - 1 - j, h - 1 - j);
-                            } else {
-                                t.set_span(w - 1 - i, j, j);
-                            }
+                // `t` is the window transposed (row i = column i, column j = row j).
+                let t = self.mask.transposed_window(ox, oy, w, h);
+                if self.turns == 1 {
+                    for i in 0..w {
+                        for (a, b) in t.runs_in(i, 0, h).into_iter().rev() {
+                            f(i, h - 1 - b, h - 1 - a);
                         }
                     }
-                }
-                for i in 0..w {
-                    for (a, b) in t.runs_in(i, 0, h) {
-                        f(i, a, b);
+                } else {
+                    for i in 0..w {
+                        for (a, b) in t.runs_in(w - 1 - i, 0, h) {
+                            f(i, a, b);
+                        }
                     }
                 }
             }
@@ -528,7 +527,9 @@ fn orient(
         .iter()
         .map(|e| e.map(|i| local[i as usize]))
         .collect();
-    let filled = fill_chain(&mut mask, &edges, CENTRE_GROW_TEXELS);
+    // `core`: a centre inside the well-shaped triangles by more than the grow, which the
+    // chart covers exactly, also after rounding (the footprint's exactness below).
+    let (filled, core) = fill_chain_with_core(&mut mask, &edges, CENTRE_GROW_TEXELS);
     let loose = rasterize_centres(
         &mut mask,
         prep.loose
@@ -557,6 +558,14 @@ fn orient(
         // meet — a touched texel of A within ⌊p/2⌋ of `L_A` and one of B within ⌊p/2⌋ of `L_B`
         // would put `L_A` and `L_B` within `p`. For ordinary charts `T ⊆ dilate(L, 1)` and
         // nothing changes when `p ≥ 2`.
+        //
+        // Unless no texel centre is known to be covered by more than the grow (`core` false,
+        // see `fill_chain_with_core`): the chart may only come within the grow of centres,
+        // and cover none at all, exactly or after rounding. The contract gives such a chart its conservative footprint (every
+        // texel touched), so `M = L ∪ T`; leaving out its touched texels next to `L` put it
+        // one texel short of the padding (issue 21's property tests,
+        // `tiny_charts_keep_the_full_padding`). A chart with a core centre covers it in the
+        // output too, and is checked by its sampled texels, a subset of `L`.
         let mut touched = Mask::new(mask.width(), mask.height());
         rasterize_touching(
             &mut touched,
@@ -567,7 +576,11 @@ fn orient(
             ),
             CENTRE_GROW_TEXELS,
         );
-        let near = mask.dilate(padding_texels / 2);
+        let near = if core {
+            mask.dilate(padding_texels / 2)
+        } else {
+            Mask::new(mask.width(), mask.height())
+        };
         mask.add_except(&touched, &near);
     }
     if chart.triangles.is_empty() {
@@ -663,6 +676,7 @@ fn bounds(points: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::atlas::pack::raster::fill_chain;
     use crate::mesh::vector::orient2;
 
     #[test]

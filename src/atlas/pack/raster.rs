@@ -159,6 +159,52 @@ impl Mask {
         }
     }
 
+    /// The 64 texels of row `y` from column `x` on (bit `k`: column `x + k`; texels past the
+    /// width count as clear).
+    fn word_at(&self, y: u32, x: u32) -> u64 {
+        let row = &self.bits[y as usize * self.words_per_row..][..self.words_per_row];
+        let (k, o) = ((x >> 6) as usize, x & 63);
+        let lo = row.get(k).copied().unwrap_or(0);
+        if o == 0 {
+            lo
+        } else {
+            let hi = row.get(k + 1).copied().unwrap_or(0);
+            (lo >> o) | (hi << (64 - o))
+        }
+    }
+
+    /// The transpose of the window of `w × h` texels at `(x0, y0)`: a mask `h` wide and `w`
+    /// tall whose texel `(j, i)` is texel `(x0 + i, y0 + j)` of this one. By 64 × 64 blocks
+    /// (a bit-matrix transpose in six swap steps), so O(w × h / 64 × 6) word operations
+    /// instead of one per texel. The window lies inside the mask.
+    pub fn transposed_window(&self, x0: u32, y0: u32, w: u32, h: u32) -> Mask {
+        let mut out = Mask::new(h, w);
+        let mut block = [0u64; 64];
+        for jb in (0..h).step_by(64) {
+            for ib in (0..w).step_by(64) {
+                let cols = (w - ib).min(64);
+                let keep = if cols == 64 {
+                    u64::MAX
+                } else {
+                    (1u64 << cols) - 1
+                };
+                for (k, b) in block.iter_mut().enumerate() {
+                    let j = jb + k as u32;
+                    *b = if j < h {
+                        self.word_at(y0 + j, x0 + ib) & keep
+                    } else {
+                        0
+                    };
+                }
+                transpose64(&mut block);
+                for (m, &b) in block.iter().enumerate().take(cols as usize) {
+                    out.bits[(ib as usize + m) * out.words_per_row + (jb >> 6) as usize] = b;
+                }
+            }
+        }
+        out
+    }
+
     /// Clears the bits past `width` in each row's last word.
     fn clear_padding_bits(&mut self) {
         let rem = self.width % 64;
@@ -514,10 +560,34 @@ pub fn rasterize_centres(
 ///
 /// Returns whether it marked anything. Cost: O(Σ rows spanned per edge + crossings · log).
 pub fn fill_chain(mask: &mut Mask, edges: &[[[f64; 2]; 2]], band_texels: f64) -> bool {
+    fill_chain_with_core(mask, edges, band_texels).0
+}
+
+/// How many texel centres [`fill_chain_with_core`] tests for a core centre at most.
+pub const CORE_CANDIDATES: usize = 16;
+
+/// [`fill_chain`], and whether it found a *core* centre: a marked centre of nonzero winding
+/// number farther than `band_texels` (Euclidean) from every edge, so inside the union by more
+/// than the band — moving the chain by less than that (rounding, the `f32` of written UVs)
+/// keeps it covered. Its winding number is exact (rounding of the crossings only matters
+/// within rounding of an edge). The candidates are the middle centres of the
+/// [`CORE_CANDIDATES`] longest runs of the fill (ties by row, then column), each tested
+/// against every edge: `false` when none of them is a core centre, which may miss one
+/// (callers treat `false` conservatively).
+///
+/// Returns `(marked anything, found a core centre)`. Cost: that of [`fill_chain`] plus
+/// O([`CORE_CANDIDATES`] × edges).
+pub fn fill_chain_with_core(
+    mask: &mut Mask,
+    edges: &[[[f64; 2]; 2]],
+    band_texels: f64,
+) -> (bool, bool) {
     let mut any = false;
     if mask.width() == 0 || mask.height() == 0 || edges.is_empty() {
-        return any;
+        return (any, false);
     }
+    // The runs of nonzero winding, `(row, first, last)`.
+    let mut runs: Vec<(u32, u32, u32)> = Vec::new();
     let (w, h) = (i64::from(mask.width()), i64::from(mask.height()));
     let e = band_texels.max(0.0);
     // Crossings per row: (row, x, +1 / -1), sorted by row then x.
@@ -572,6 +642,9 @@ pub fn fill_chain(mask: &mut Mask, edges: &[[[f64; 2]; 2]], band_texels: f64) ->
         };
         if i0 <= i1 {
             mask.set_span(row, i0 as u32, i1 as u32);
+            if xb.is_finite() {
+                runs.push((row, i0 as u32, i1 as u32));
+            }
             any = true;
         }
     };
@@ -596,7 +669,54 @@ pub fn fill_chain(mask: &mut Mask, edges: &[[[f64; 2]; 2]], band_texels: f64) ->
             emit(mask, row, start, f64::INFINITY);
         }
     }
-    any
+    let key = |&(row, a, b): &(u32, u32, u32)| (std::cmp::Reverse(b - a), row, a);
+    let far = |c: [f64; 2]| {
+        edges.iter().all(|&[p, q]| {
+            let d = [q[0] - p[0], q[1] - p[1]];
+            let len2 = d[0] * d[0] + d[1] * d[1];
+            let t = if len2 > 0.0 {
+                (((c[0] - p[0]) * d[0] + (c[1] - p[1]) * d[1]) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let (dx, dy) = (c[0] - p[0] - t * d[0], c[1] - p[1] - t * d[1]);
+            // NaN (non-finite edges, skipped by the fill) counts as near.
+            dx * dx + dy * dy > e * e
+        })
+    };
+    let middle = |&(row, a, b): &(u32, u32, u32)| {
+        far([f64::from(a + (b - a) / 2) + 0.5, f64::from(row) + 0.5])
+    };
+    // The longest run first (it nearly always passes), then the others of the longest
+    // `CORE_CANDIDATES`: the same answer as testing those in order, without sorting all.
+    let core = match runs.iter().min_by_key(|r| key(r)) {
+        None => false,
+        Some(r) if middle(r) => true,
+        Some(_) => {
+            runs.sort_by_key(key);
+            runs.iter().take(CORE_CANDIDATES).skip(1).any(middle)
+        }
+    };
+    (any, core)
+}
+
+/// Transposes a 64 × 64 bit matrix in place (row `k` = word `k`, column `m` = bit `m`): bit
+/// `m` of word `k` becomes bit `k` of word `m`. Six steps, each swapping the off-diagonal
+/// blocks of half the size (Warren, "Hacker's Delight", §7-3).
+fn transpose64(a: &mut [u64; 64]) {
+    let mut j = 32usize;
+    let mut m: u64 = 0x0000_0000_FFFF_FFFF;
+    while j != 0 {
+        let mut k = 0usize;
+        while k < 64 {
+            let t = ((a[k] >> j) ^ a[k + j]) & m;
+            a[k + j] ^= t;
+            a[k] ^= t << j;
+            k = (k + j + 1) & !j;
+        }
+        j >>= 1;
+        m ^= m << j;
+    }
 }
 
 /// `floor` as an integer for |x| < 2^62, without a libm call.
@@ -750,6 +870,52 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    #[test]
+    fn transposed_window_matches_a_texel_by_texel_transpose() {
+        let mut state = 0x5151_2727_9e37_79b9u64;
+        for case in 0..40 {
+            let (w, h) = (
+                1 + (xorshift(&mut state) * 200.0) as u32,
+                1 + (xorshift(&mut state) * 150.0) as u32,
+            );
+            let mut m = Mask::new(w, h);
+            for y in 0..h {
+                for x in 0..w {
+                    if xorshift(&mut state) < 0.4 {
+                        m.set_span(y, x, x);
+                    }
+                }
+            }
+            let x0 = (xorshift(&mut state) * f64::from(w)) as u32;
+            let y0 = (xorshift(&mut state) * f64::from(h)) as u32;
+            let (ww, wh) = (
+                1 + (xorshift(&mut state) * f64::from(w - x0 - 1)) as u32,
+                1 + (xorshift(&mut state) * f64::from(h - y0 - 1)) as u32,
+            );
+            let t = m.transposed_window(x0, y0, ww, wh);
+            assert_eq!((t.width(), t.height()), (wh, ww), "case {case}");
+            for i in 0..i64::from(ww) {
+                for j in 0..i64::from(wh) {
+                    assert_eq!(
+                        t.get(j, i),
+                        m.get(i64::from(x0) + i, i64::from(y0) + j),
+                        "case {case}: ({i}, {j})"
+                    );
+                }
+            }
+            // Nothing past the width of any row (the padding bits stay clear).
+            assert_eq!(
+                t.count(),
+                (0..ww)
+                    .map(|i| (0..wh)
+                        .filter(|&j| m.get(i64::from(x0 + i), i64::from(y0 + j)))
+                        .count() as u64)
+                    .sum::<u64>(),
+                "case {case}"
+            );
         }
     }
 
