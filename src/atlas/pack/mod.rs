@@ -20,8 +20,10 @@
 //! a superset of the texel-centre sampled coverage that [`crate::atlas::measure`] checks, also
 //! after `f32` rounding) are at Chebyshev distance `> padding_texels`, and every footprint
 //! texel is at least `padding_texels` from the page edge (the report's
-//! `padding.violation_texels` is 0). Charts too small to cover a texel centre use their
-//! conservative footprint (every texel touched); the touched texels of thin parts (slivers,
+//! `padding.violation_texels` is 0). A chart with no texel centre inside it by more than the
+//! grow (a *core* centre) uses its conservative footprint (every texel touched): a chart that
+//! only grazes centres within the grow would otherwise leave out touched texels next to its
+//! one-texel footprint and sit one texel short of the padding; the touched texels of thin parts (slivers,
 //! spikes) away from the sampled footprint are added to it (see `place::orientation`), so that
 //! no two charts' triangles overlap exactly either. The whole chart stays inside its grid,
 //! which stays on the page (UVs in \[0,1\]). Every chart has the same density: placed UV area

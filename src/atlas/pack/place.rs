@@ -6,7 +6,8 @@
 //! computed as the nonzero-winding fill of the boundary chain of its well-shaped triangles,
 //! [`super::raster::fill_chain`], plus [`super::raster::rasterize_centres`] of the thin or
 //! reversed ones; the conservative raster of its outline triangles when
-//! it covers no centre) and `F` dilated
+//! no centre lies inside it by more than the grow, see `raster::fill_chain_with_core`) and `F`
+//! dilated
 //! by the padding (`D`), both summarised as per-column and per-row extents (the horizons of
 //! lscm-2002 §4 step 3, "with an additional margin").
 //!
