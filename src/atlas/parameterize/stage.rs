@@ -69,7 +69,7 @@ pub struct ParameterizedCharts {
     /// The map of each chart (same order as `segmentation.charts`). **Contract:** every entry is
     /// `Some`, and its vertex list is exactly `chart_mesh(mesh, &segmentation.charts[i]).1`, so
     /// it covers every vertex of the chart's faces and `uv[l]` is the UV of the chart-local
-    /// vertex `l` of [`chart_mesh`](super::chart_mesh)'s triangles. (`Option` is kept for the stable type; `None`
+    /// vertex `l` of [`chart_mesh`]'s triangles. (`Option` is kept for the stable type; `None`
     /// is never returned.) Zero-area faces map to (near-)degenerate UV triangles (module doc).
     pub maps: Vec<Option<LocatedMap>>,
     /// Charts returned although not valid: chart index and why. Such a chart still has a map

@@ -29,7 +29,7 @@
 //!   the chart's L2, with the chart's L∞ not allowed to rise above its value after the L∞ phase;
 //! - a move of a boundary vertex is kept only if its two boundary segments cross no other
 //!   (`defects::segments_intersect`) and no boundary vertex of its fan folds (UV angle sum
-//!   below 2π); otherwise the step is halved, at most [`BOUNDARY_RETRIES`] times.
+//!   below 2π); otherwise the step is halved, at most `BOUNDARY_RETRIES` times.
 //!
 //! The L∞ phase visits, by decreasing local maximum, only the vertices whose local maximum's
 //! excess over 1 is at least [`LINF_VISIT_FRACTION`] of the chart's; the L2 phase visits every movable vertex
