@@ -262,8 +262,41 @@ fn signed_area(uv: &[[f32; 2]; 3]) -> (f64, bool) {
 
 /// Face `f` (with 3-D area) is non-degenerate in UV and oriented as its chart was.
 fn face_ok(check: &OrientationCheck, corner_uvs: &[[[f32; 2]; 3]], f: usize) -> bool {
-    let (a2, degenerate) = signed_area(&corner_uvs[f]);
+    oriented(check, f, &corner_uvs[f])
+}
+
+/// The UV triangle `uv` of face `f` is non-degenerate and oriented as `f`'s chart.
+fn oriented(check: &OrientationCheck, f: usize, uv: &[[f32; 2]; 3]) -> bool {
+    let (a2, degenerate) = signed_area(uv);
     !degenerate && (a2 > 0.0) == check.chart_positive[check.chart_of_face[f] as usize]
+}
+
+/// Moves the UV vertex `group` (now at `c`) along `dir` by 1, 2, 4, … [`NUDGE_MAX_ULPS`] `f32`
+/// spacings and keeps the first finite move that `allowed` accepts and after which every face
+/// at the vertex but `except` is fine ([`moves_fine`]); returns whether one was kept.
+fn first_fine_move(
+    check: &OrientationCheck,
+    group: &[u32],
+    corner_uvs: &mut [[[f32; 2]; 3]],
+    (c, dir): ([f32; 2], [f64; 2]),
+    except: usize,
+    allowed: impl Fn([f32; 2]) -> bool,
+) -> bool {
+    let mut steps = 1u32;
+    while steps <= NUDGE_MAX_ULPS {
+        let moved = step(c, dir, steps);
+        steps *= 2;
+        if moved == c || !moved.iter().all(|x| x.is_finite()) || !allowed(moved) {
+            continue;
+        }
+        if moves_fine(check, group, corner_uvs, moved, except) {
+            for &corner in group {
+                corner_uvs[corner as usize / 3][corner as usize % 3] = moved;
+            }
+            return true;
+        }
+    }
+    false
 }
 
 /// Moves the UV vertex at corner `k` of face `f` off the UV of the face's other corners, by
@@ -278,28 +311,11 @@ fn separate(
 ) -> bool {
     let c = corner_uvs[f][k];
     let group = vertices.group(3 * f + k);
-    for dir in [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]] {
-        let mut steps = 1u32;
-        while steps <= NUDGE_MAX_ULPS {
-            let moved = step(c, dir, steps);
-            steps *= 2;
-            let uv = corner_uvs[f];
-            if moved == c
-                || moved == uv[(k + 1) % 3]
-                || moved == uv[(k + 2) % 3]
-                || !moved.iter().all(|x| x.is_finite())
-            {
-                continue;
-            }
-            if moves_fine(check, group, corner_uvs, moved, f) {
-                for &corner in group {
-                    corner_uvs[corner as usize / 3][corner as usize % 3] = moved;
-                }
-                return true;
-            }
-        }
-    }
-    false
+    let uv = corner_uvs[f];
+    let off_the_others = |moved: [f32; 2]| moved != uv[(k + 1) % 3] && moved != uv[(k + 2) % 3];
+    [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]]
+        .into_iter()
+        .any(|dir| first_fine_move(check, group, corner_uvs, (c, dir), f, off_the_others))
 }
 
 /// `c` moved by `steps` `f32` spacings (the larger of its two coordinates') along `dir`.
@@ -331,8 +347,7 @@ fn moves_fine(
         }
         let mut t = corner_uvs[g];
         t[j] = moved;
-        let (a2, degenerate) = signed_area(&t);
-        !degenerate && (a2 > 0.0) == check.chart_positive[check.chart_of_face[g] as usize]
+        oriented(check, g, &t)
     })
 }
 
@@ -361,21 +376,7 @@ fn nudge(
     let sign = if positive { 1.0 } else { -1.0 };
     let n = [-e[1] / len * sign, e[0] / len * sign];
     let group = vertices.group(3 * f + k);
-    let mut steps = 1u32;
-    while steps <= NUDGE_MAX_ULPS {
-        let moved = step(c, n, steps);
-        steps *= 2;
-        if moved == c || !moved.iter().all(|x| x.is_finite()) {
-            continue;
-        }
-        if moves_fine(check, group, corner_uvs, moved, usize::MAX) {
-            for &corner in group {
-                corner_uvs[corner as usize / 3][corner as usize % 3] = moved;
-            }
-            return true;
-        }
-    }
-    false
+    first_fine_move(check, group, corner_uvs, (c, n), usize::MAX, |_| true)
 }
 
 /// `validated` with each face of `faults` (ascending) split off its chart into a chart of its

@@ -246,12 +246,7 @@ impl FlowGraph {
                     }
                     // The tree arc o → q (stored as the parent arc) must carry flow in the
                     // tree's direction: q → o for S (arc a ^ 1), o → q for T (arc a).
-                    let residual = if t == Tree::Source {
-                        self.cap[(a ^ 1) as usize]
-                    } else {
-                        self.cap[a as usize]
-                    };
-                    if residual > 0 && rooted(&parent, &self.head, q) {
+                    if self.toward_child(t, a) > 0 && rooted(&parent, &self.head, q) {
                         parent[o] = Parent::Arc(a);
                         adopted = true;
                         break;
@@ -265,12 +260,7 @@ impl FlowGraph {
                     if tree[q] != t {
                         continue;
                     }
-                    let residual = if t == Tree::Source {
-                        self.cap[(a ^ 1) as usize]
-                    } else {
-                        self.cap[a as usize]
-                    };
-                    if residual > 0 {
+                    if self.toward_child(t, a) > 0 {
                         active.push_back(q as u32);
                     }
                     if parent[q] == Parent::Arc(a ^ 1) {
@@ -294,6 +284,18 @@ impl FlowGraph {
             })
             .collect();
         MinCut { flow, side }
+    }
+}
+
+impl FlowGraph {
+    /// Residual capacity, in tree `t`'s flow direction, of the arc pair of `a` (an arc leaving a
+    /// node `o` of `t` towards `q`): `q → o` for the source tree, `o → q` for the sink tree.
+    fn toward_child(&self, t: Tree, a: u32) -> i64 {
+        if t == Tree::Source {
+            self.cap[(a ^ 1) as usize]
+        } else {
+            self.cap[a as usize]
+        }
     }
 }
 
