@@ -362,7 +362,7 @@ pub(super) fn optimize_stretch_charts(
                 zero_area: &zero_area,
             };
             let outcome = optimize_chart_stretch(&chart, &mut uv, passes);
-            if outcome.moves == 0 {
+            if outcome.moves == 0 && outcome.global_steps == 0 {
                 return (i, None, outcome);
             }
             let energy = conformal_energy(&cm, &uv);

@@ -114,6 +114,8 @@ pub struct ChartStretchOutcome {
     pub moves: usize,
     /// Passes undone by the per-pass check (a per-move test was too weak; should stay 0).
     pub passes_undone: usize,
+    /// Steps of the global descent kept (`global`).
+    pub global_steps: usize,
     /// The chart's L2 and L∞ before and after (the scaled metric of the module doc); `None`
     /// when not optimised.
     pub before: Option<(f64, f64)>,
@@ -319,6 +321,17 @@ pub fn optimize_chart_stretch(
     out.before = Some(before);
     let original = uv.to_vec();
     let mut current = before;
+    // First the chart-wide scale error, all vertices at once (`global`), with L∞ capped.
+    out.global_steps = global::descend(&st, uv, before.1 * (1.0 + LINF_ROUNDING));
+    if out.global_steps > 0 {
+        match st.check(uv) {
+            Some(after) => current = after,
+            None => {
+                uv.copy_from_slice(&original);
+                out.global_steps = 0;
+            }
+        }
+    }
     let mut order: Vec<u32> = Vec::new();
     for phase in [Phase::Linf, Phase::L2] {
         // The cap on the chart's L∞ for the L2 phase: its value after the L∞ phase.
@@ -376,6 +389,7 @@ pub fn optimize_chart_stretch(
     if !(current.0 <= before.0 && current.1 <= before.1 * (1.0 + LINF_ROUNDING)) {
         uv.copy_from_slice(&original);
         out.moves = 0;
+        out.global_steps = 0;
         current = before;
     }
     out.after = Some(current);
@@ -994,5 +1008,6 @@ pub fn chart_stretch(chart: &StretchChart<'_>, uv: &[[f64; 2]]) -> Option<(f64, 
     ))
 }
 
+mod global;
 #[cfg(test)]
 mod tests;
