@@ -47,10 +47,13 @@ pub enum SolverJson {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum StretchOptimizationJson {
-    /// None: the conformal (LSCM) maps as they are (the default).
-    #[default]
+    /// None: the conformal (LSCM) maps as they are.
     None,
-    /// Sander et al. 2001: L∞ stretch first, then L2, by vertex moves that never flip.
+    /// The global descent of each chart's L2 stretch (all vertices at once, never flipping).
+    /// The default.
+    #[default]
+    Global,
+    /// The global descent, then Sander et al. 2001's vertex moves: L∞ stretch first, then L2.
     LinfL2,
 }
 
@@ -241,6 +244,7 @@ impl OptionsJson {
         atlas.parameterize.stretch_optimization =
             match self.stretch_optimization.unwrap_or_default() {
                 StretchOptimizationJson::None => StretchOptimization::None,
+                StretchOptimizationJson::Global => StretchOptimization::Global,
                 StretchOptimizationJson::LinfL2 => StretchOptimization::LinfL2,
             };
         if let Some(n) = self.stretch_passes {
@@ -298,6 +302,7 @@ impl OptionsJson {
             }),
             stretch_optimization: Some(match a.parameterize.stretch_optimization {
                 StretchOptimization::None => StretchOptimizationJson::None,
+                StretchOptimization::Global => StretchOptimizationJson::Global,
                 StretchOptimization::LinfL2 => StretchOptimizationJson::LinfL2,
             }),
             stretch_passes: Some(a.parameterize.stretch_passes),

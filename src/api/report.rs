@@ -113,8 +113,8 @@ pub struct PipelineJson {
     /// Charts made only of degenerate faces (zero area or a repeated vertex): not packed, their
     /// corners sit on a coincident vertex of a packed chart (zero UV area).
     pub degenerate_charts: usize,
-    /// The stretch optimisation that ran on the charts' maps: `linf_l2` (Sander et al. 2001)
-    /// or `none`.
+    /// The stretch optimisation that ran on the charts' maps: `global` (the global L2 descent),
+    /// `linf_l2` (the global descent, then Sander et al. 2001's vertex passes) or `none`.
     pub stretch_optimization: &'static str,
     /// Charts whose map the stretch optimisation ran on.
     pub charts_stretch_optimized: usize,

@@ -93,11 +93,12 @@ pub struct OptionFlags {
     /// Solver: auto, direct or hierarchical. Default auto.
     #[arg(long, value_parser = parse_solver)]
     pub solver: Option<SolverJson>,
-    /// Stretch optimisation of every chart's map after validation: linf_l2 (Sander et al.
-    /// 2001: L∞ then L2, never flipping) or none. Default none.
+    /// Stretch optimisation of every chart's map after validation: global (a descent of each
+    /// chart's L2 stretch, all vertices at once, never flipping), linf_l2 (global, then Sander
+    /// et al. 2001's vertex passes: L∞ then L2) or none. Default global.
     #[arg(long, value_parser = parse_stretch_optimization)]
     pub stretch_optimization: Option<StretchOptimizationJson>,
-    /// Passes of each phase of the stretch optimisation (>= 1). Default 4.
+    /// Passes of each vertex phase of linf_l2 (>= 1). Default 4.
     #[arg(long)]
     pub stretch_passes: Option<u32>,
     /// Which TEXCOORD_k receives the atlas, one set for every primitive: `first_free` (the
@@ -186,9 +187,10 @@ fn parse_solver(s: &str) -> Result<SolverJson, String> {
 fn parse_stretch_optimization(s: &str) -> Result<StretchOptimizationJson, String> {
     match s {
         "linf_l2" => Ok(StretchOptimizationJson::LinfL2),
+        "global" => Ok(StretchOptimizationJson::Global),
         "none" => Ok(StretchOptimizationJson::None),
         _ => Err(format!(
-            "`{s}` is not a stretch optimisation; use linf_l2 or none"
+            "`{s}` is not a stretch optimisation; use global, linf_l2 or none"
         )),
     }
 }

@@ -320,9 +320,11 @@ pub(super) fn optimize_stretch_charts(
     passes: u32,
 ) -> StretchStats {
     let mut stats = StretchStats::default();
-    if method == StretchOptimization::None || passes == 0 {
-        return stats;
-    }
+    let passes = match method {
+        StretchOptimization::None => return stats,
+        StretchOptimization::Global => 0,
+        StretchOptimization::LinfL2 => passes,
+    };
     let bad: Vec<usize> = v
         .unresolved
         .iter()

@@ -1,6 +1,8 @@
-//! Stretch optimisation of a chart's map (Sander, Snyder, Gortler, Hoppe 2001 §4, as used by
-//! Iso-charts 2004 §3–4): first the chart's L∞ stretch, then its L2 stretch, by moving one
-//! vertex at a time along a line search inside the region where none of its triangles flips.
+//! Stretch optimisation of a chart's map: first a global descent of the chart's L2 stretch, all
+//! vertices at once (`global`, the quadratic proxy of Kovalsky et al. 2016), then, when passes
+//! are asked for, Sander, Snyder, Gortler, Hoppe 2001 §4 (as used by Iso-charts 2004 §3–4): the
+//! chart's L∞ stretch, then its L2 stretch, by moving one vertex at a time along a line search
+//! inside the region where none of its triangles flips.
 //!
 //! Purpose: LSCM maps are conformal, so their area (and thus texel density) varies over a chart;
 //! Sander's geometric stretch measures that. [`optimize_chart_stretch`] lowers it on a valid map
@@ -303,8 +305,9 @@ struct State<'a> {
     small_bound: f64,
 }
 
-/// Optimises `uv` (one per chart vertex, model units) for Sander's stretch with `passes` passes
-/// of each phase; see the module doc for the algorithm and its guarantees. Pure and sequential.
+/// Optimises `uv` (one per chart vertex, model units) for Sander's stretch: the global descent,
+/// then `passes` passes of each vertex phase (0: the global descent only); see the module doc for
+/// the algorithm and its guarantees. Pure and sequential.
 pub fn optimize_chart_stretch(
     chart: &StretchChart<'_>,
     uv: &mut [[f64; 2]],

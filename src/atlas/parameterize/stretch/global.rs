@@ -22,7 +22,7 @@
 //! step is accepted. Deterministic and sequential.
 //!
 //! Units: UVs in model units; `E` in (model units)⁴ (only its ratios are used).
-use super::{sub2, FrameFace, State};
+use super::{crossing_among, sub2, FrameFace, State, FOLD_MARGIN_RAD};
 use crate::numerics::{CsrMatrix, SparseCholesky, Triplet};
 
 /// Steps of the global descent, at most. Trade-off: each costs one gradient, two triangular
@@ -40,32 +40,56 @@ const FLIP_MARGIN: f64 = 0.9;
 /// (obtuse angles) could make it indefinite, and a sliver's huge weight only slows the solve.
 const COT_MAX: f64 = 1e3;
 
-/// `E` and, when `grad` is given, its gradient per vertex; `None` when a face of positive model
-/// area is not positively oriented.
+/// `E` with the chart's `Σ 2·A2`, largest `Γ` and smallest `γ` (unscaled).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Energy {
+    pub(super) value: f64,
+    sum_det: f64,
+    big_max: f64,
+    small_min: f64,
+}
+
+impl Energy {
+    /// The chart's L∞ in the scaled metric of the module doc of `stretch`.
+    fn linf(&self, a3_total: f64) -> f64 {
+        let s = (0.5 * self.sum_det / a3_total).sqrt();
+        (self.big_max * s).max(1.0 / (self.small_min * s))
+    }
+}
+
+/// Per face of positive model area: its corners and the gradients of `2·A2` and of
+/// `A3·|M|²/2` with respect to them (scratch of [`energy`]).
+type FaceGrad = ([u32; 3], [[f64; 2]; 3], [[f64; 2]; 3]);
+
+/// `E` and, when `grad` is given, its gradient per vertex (`scratch` is reused between calls);
+/// `None` when a face of positive model area is not positively oriented.
 pub(super) fn energy(
     st: &State<'_>,
     uv: &[[f64; 2]],
     grad: Option<&mut [[f64; 2]]>,
-) -> Option<f64> {
+    scratch: &mut Vec<FaceGrad>,
+) -> Option<Energy> {
     let (mut sum_det, mut sum_e) = (0.0, 0.0);
+    let (mut big_max, mut small_min) = (0.0f64, f64::INFINITY);
     let want = grad.is_some();
-    // Per face: (vertex, d det/d q, d e/d q) for the three corners.
-    let mut parts: Vec<([u32; 3], [[f64; 2]; 3], [[f64; 2]; 3])> = Vec::new();
+    scratch.clear();
     for (f, t) in st.chart.triangles.iter().enumerate() {
         let Some(frame) = st.frames[f] else {
             continue;
         };
         let q = t.map(|i| uv[i as usize]);
-        let (det, e, ddet, de) = face_terms(&frame, q)?;
-        sum_det += det;
-        sum_e += e;
+        let terms = face_terms(&frame, q)?;
+        sum_det += terms.det;
+        sum_e += terms.e;
+        big_max = big_max.max(terms.big);
+        small_min = small_min.min(terms.small);
         if want {
-            parts.push((*t, ddet, de));
+            scratch.push((*t, terms.ddet, terms.de));
         }
     }
     if let Some(g) = grad {
         g.iter_mut().for_each(|x| *x = [0.0; 2]);
-        for (t, ddet, de) in &parts {
+        for (t, ddet, de) in scratch.iter() {
             for k in 0..3 {
                 let v = t[k] as usize;
                 g[v][0] += sum_e * ddet[k][0] + sum_det * de[k][0];
@@ -73,16 +97,27 @@ pub(super) fn energy(
             }
         }
     }
-    Some(sum_det * sum_e)
+    Some(Energy {
+        value: sum_det * sum_e,
+        sum_det,
+        big_max,
+        small_min,
+    })
 }
 
-/// One face's `2·A2`, `A3·|M|²/2` and their gradients with respect to its three UV corners;
-/// `None` when the UV triangle is not positively oriented.
-#[allow(clippy::type_complexity)]
-fn face_terms(
-    frame: &FrameFace,
-    q: [[f64; 2]; 3],
-) -> Option<(f64, f64, [[f64; 2]; 3], [[f64; 2]; 3])> {
+/// One face's terms: `2·A2`, `A3·|M|²/2`, their gradients with respect to the three UV corners,
+/// and the singular values `Γ ≥ γ` of `M`.
+struct FaceTerms {
+    det: f64,
+    e: f64,
+    ddet: [[f64; 2]; 3],
+    de: [[f64; 2]; 3],
+    big: f64,
+    small: f64,
+}
+
+/// One face's [`FaceTerms`]; `None` when the UV triangle is not positively oriented.
+fn face_terms(frame: &FrameFace, q: [[f64; 2]; 3]) -> Option<FaceTerms> {
     let u1 = sub2(q[1], q[0]);
     let u2 = sub2(q[2], q[0]);
     let det = u1[0] * u2[1] - u1[1] * u2[0];
@@ -115,7 +150,19 @@ fn face_terms(
     let dd2 = [-u1[1], u1[0]];
     let de = [[-de1[0] - de2[0], -de1[1] - de2[1]], de1, de2];
     let ddet = [[-dd1[0] - dd2[0], -dd1[1] - dd2[1]], dd1, dd2];
-    (e.is_finite()).then_some((det, e, ddet, de))
+    // Singular values as in `FrameFace::singular_values`.
+    let (ce, cf) = (0.5 * (m00 + m11), 0.5 * (m00 - m11));
+    let (cg, ch) = (0.5 * (m10 + m01), 0.5 * (m10 - m01));
+    let big = (ce * ce + ch * ch).sqrt() + (cf * cf + cg * cg).sqrt();
+    let small = frame.l1 * frame.y2 * inv / big;
+    (e.is_finite() && big.is_finite() && small > 0.0).then_some(FaceTerms {
+        det,
+        e,
+        ddet,
+        de,
+        big,
+        small,
+    })
 }
 
 /// The largest `t` such that, moving every vertex by `t·d`, no face of positive model area
@@ -226,6 +273,40 @@ fn preconditioner(st: &State<'_>, n: usize) -> Option<SparseCholesky> {
     SparseCholesky::factor(&a).ok()
 }
 
+/// Whether the boundary of the positive-area faces is simple and no boundary vertex folds (its
+/// UV angles sum to less than 2π − `FOLD_MARGIN_RAD`). An interior vertex needs no test here:
+/// along a path on which its faces stay positive, its fan's winding number cannot change. The
+/// caller checks everything once more at the end (`State::check`).
+fn boundary_ok(st: &State<'_>, uv: &[[f64; 2]]) -> bool {
+    if crossing_among(&st.segs, uv).is_some() {
+        return false;
+    }
+    let limit = std::f64::consts::TAU - FOLD_MARGIN_RAD;
+    for &(w, _, _) in &st.segs {
+        let w = w as usize;
+        let mut sum = 0.0;
+        for (f, c) in st.inc.of(w) {
+            if st.frames[f].is_none() {
+                continue;
+            }
+            let t = st.chart.triangles[f];
+            let (pw, pa, pb) = (
+                uv[t[c] as usize],
+                uv[t[(c + 1) % 3] as usize],
+                uv[t[(c + 2) % 3] as usize],
+            );
+            let (e1, e2) = (sub2(pa, pw), sub2(pb, pw));
+            sum += (e1[0] * e2[1] - e1[1] * e2[0])
+                .atan2(e1[0] * e2[0] + e1[1] * e2[1])
+                .abs();
+        }
+        if !(sum < limit) {
+            return false;
+        }
+    }
+    true
+}
+
 /// Runs the global descent on `uv` (module doc); returns the number of steps kept. `uv` must
 /// satisfy the invariants on entry (`State::check`), and does on return.
 pub(super) fn descend(st: &State<'_>, uv: &mut [[f64; 2]], linf_cap: f64) -> usize {
@@ -234,7 +315,8 @@ pub(super) fn descend(st: &State<'_>, uv: &mut [[f64; 2]], linf_cap: f64) -> usi
         return 0;
     };
     let mut grad = vec![[0.0; 2]; n];
-    let Some(mut e) = energy(st, uv, Some(&mut grad)) else {
+    let mut scratch = Vec::new();
+    let Some(mut e) = energy(st, uv, Some(&mut grad), &mut scratch).map(|x| x.value) else {
         return 0;
     };
     let mut steps = 0;
@@ -268,11 +350,12 @@ pub(super) fn descend(st: &State<'_>, uv: &mut [[f64; 2]], linf_cap: f64) -> usi
             for (c, (p, dv)) in cand.iter_mut().zip(uv.iter().zip(&d)) {
                 *c = [p[0] + t * dv[0], p[1] + t * dv[1]];
             }
-            if let Some(ec) = energy(st, &cand, None) {
-                if ec <= e + ARMIJO * t * slope
-                    && st.check(&cand).is_some_and(|(_, linf)| linf <= linf_cap)
+            if let Some(ec) = energy(st, &cand, None, &mut scratch) {
+                if ec.value <= e + ARMIJO * t * slope
+                    && ec.linf(st.a3_total) <= linf_cap
+                    && boundary_ok(st, &cand)
                 {
-                    accepted = Some(ec);
+                    accepted = Some(ec.value);
                     break;
                 }
             }
@@ -285,8 +368,8 @@ pub(super) fn descend(st: &State<'_>, uv: &mut [[f64; 2]], linf_cap: f64) -> usi
         steps += 1;
         t_prev = Some(t);
         let gain = e - ec;
-        e = match energy(st, uv, Some(&mut grad)) {
-            Some(x) => x,
+        e = match energy(st, uv, Some(&mut grad), &mut scratch) {
+            Some(x) => x.value,
             None => break,
         };
         if gain < GLOBAL_MIN_GAIN * ec {
@@ -323,7 +406,7 @@ mod tests {
         ];
         for (p, q) in cases {
             let fr = frame(p);
-            let (_, _, ddet, de) = face_terms(&fr, q).unwrap();
+            let FaceTerms { ddet, de, .. } = face_terms(&fr, q).unwrap();
             for k in 0..3 {
                 for c in 0..2 {
                     let h = 1e-6;
@@ -331,8 +414,9 @@ mod tests {
                     let mut qm = q;
                     qp[k][c] += h;
                     qm[k][c] -= h;
-                    let (dp, ep, _, _) = face_terms(&fr, qp).unwrap();
-                    let (dm, em, _, _) = face_terms(&fr, qm).unwrap();
+                    let p = face_terms(&fr, qp).unwrap();
+                    let m = face_terms(&fr, qm).unwrap();
+                    let (dp, ep, dm, em) = (p.det, p.e, m.det, m.e);
                     let fd_det = (dp - dm) / (2.0 * h);
                     let fd_e = (ep - em) / (2.0 * h);
                     assert!(
@@ -355,9 +439,16 @@ mod tests {
     fn face_energy_is_the_l2_integrand() {
         let fr = frame([[0.0, 0.0, 0.0], [1.0, 0.0, 0.2], [0.3, 0.9, -0.1]]);
         let q = [[0.1, 0.2], [1.3, 0.1], [0.5, 1.4]];
-        let (det, e, _, _) = face_terms(&fr, q).unwrap();
+        let FaceTerms {
+            det,
+            e,
+            big: b,
+            small: sm,
+            ..
+        } = face_terms(&fr, q).unwrap();
         let (big, small, det2) = fr.singular_values(q).unwrap();
         assert!((det - det2).abs() <= 1e-12);
+        assert!((b - big).abs() <= 1e-12 * big && (sm - small).abs() <= 1e-12 * small);
         let want = 0.5 * fr.a3 * (big * big + small * small);
         assert!((e - want).abs() <= 1e-12 * want, "{e} vs {want}");
     }
