@@ -444,7 +444,10 @@ mod tests {
             (r#"{"hard_edge_angle_deg":0}"#, "hard_edge_angle_deg"),
             (r#"{"hard_edge_angle_deg":181}"#, "hard_edge_angle_deg"),
             (r#"{"max_charts":0}"#, "max_charts"),
-            (r#"{"parameterization":"asp","asp_theta":-0.5}"#, "asp_theta"),
+            (
+                r#"{"parameterization":"asp","asp_theta":-0.5}"#,
+                "asp_theta",
+            ),
             (r#"{"parameterization":"asp","asp_theta":9}"#, "asp_theta"),
         ] {
             let o: OptionsJson = serde_json::from_str(text).unwrap();

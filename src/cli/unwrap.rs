@@ -11,8 +11,8 @@ use std::process::ExitCode;
 use anyhow::{bail, Context as _};
 use indicatif::{ProgressBar, ProgressStyle};
 use texatlas::api::{
-    OptionsJson, OutputFormatJson, ResolutionJson, SolverJson, StretchOptimizationJson, ParameterizationJson, UvSetJson,
-    UvSetName,
+    OptionsJson, OutputFormatJson, ParameterizationJson, ResolutionJson, SolverJson,
+    StretchOptimizationJson, UvSetJson, UvSetName,
 };
 use texatlas::atlas::{Progress, Stage};
 use texatlas::preview::{preview_size_px, render_preview};

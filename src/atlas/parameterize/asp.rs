@@ -54,10 +54,10 @@
 //! kernel); K. Hormann, G. Greiner, "MIPS: An Efficient Global Parametrization Method", 2000.
 use super::chart::exceeds;
 use super::defects::{crossing_among, fold_with_boundary};
+use super::options::ASP_MAX_THETA;
 use super::stretch::{
     boundary_move_ok, boundary_segments, cross2, sub2, BoundaryView, Incidence, StretchChart,
 };
-use super::options::ASP_MAX_THETA;
 use super::ChartMesh;
 
 /// Sweeps over a chart's vertices, at most. Trade-off: each sweep costs about `NEWTON_STEPS`
@@ -106,10 +106,9 @@ impl AspFace {
             let (o, a, b) = (p[i], p[(i + 1) % 3], p[(i + 2) % 3]);
             dot(d(o, a), d(o, b)) / (twice * twice)
         });
-        w.iter().all(|x| x.is_finite()).then_some(Self {
-            a3: 0.5 * twice,
-            w,
-        })
+        w.iter()
+            .all(|x| x.is_finite())
+            .then_some(Self { a3: 0.5 * twice, w })
     }
 
     /// The face's energy times its model area with UV corners `q`; `None` when the UV triangle
@@ -279,7 +278,7 @@ fn relax_until(
     tolerance: f64,
 ) -> AspOutcome {
     let mut out = AspOutcome::default();
-    if !(theta >= 0.0 && theta <= ASP_MAX_THETA) {
+    if !(0.0..=ASP_MAX_THETA).contains(&theta) {
         return out;
     }
     let Some(st) = State::new(chart, uv, theta) else {
@@ -442,7 +441,13 @@ impl<'a> State<'a> {
     }
 
     /// [`Self::ring_energy`] and, with `gradient`, its gradient in `p`.
-    fn ring(&self, uv: &[[f64; 2]], v: usize, p: [f64; 2], gradient: bool) -> Option<(f64, [f64; 2])> {
+    fn ring(
+        &self,
+        uv: &[[f64; 2]],
+        v: usize,
+        p: [f64; 2],
+        gradient: bool,
+    ) -> Option<(f64, [f64; 2])> {
         let (mut e, mut g) = (0.0, [0.0, 0.0]);
         for (f, c) in self.inc.of(v) {
             let t = self.chart.triangles[f];

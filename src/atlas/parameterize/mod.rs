@@ -61,13 +61,13 @@ mod warm_start;
 #[cfg(test)]
 mod tests;
 
+pub use asp::{asp_energy, relax_chart_asp, relax_chart_asp_hierarchical, AspOutcome, AspStats};
 pub use chart::{ChartMesh, ChartTopology};
 pub use defects::{boundary_crossing, vertex_fold, ChartDefect};
 pub use extract::chart_mesh;
 pub use flatten::{flatten_chart, ChartMap, FlattenOptions, LocatedMap, ParameterizeMethod};
 pub use hlscm::{HlscmLevel, HlscmOptions, HlscmReport, HlscmSmoother};
 pub use lscm::{conformal_energy, flipped_faces, LscmSystem, Pin};
-pub use asp::{asp_energy, relax_chart_asp, relax_chart_asp_hierarchical, AspOutcome, AspStats};
 pub use options::{
     Parameterization, ParameterizeOptions, ASP_MAX_THETA, LATE_MERGE_MAX_FACES,
     MERGE_CAP_FLOOR_FACES,

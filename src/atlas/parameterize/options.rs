@@ -190,7 +190,7 @@ impl ParameterizeOptions {
                 ),
             });
         }
-        if !(self.asp_theta >= 0.0 && self.asp_theta <= ASP_MAX_THETA) {
+        if !(0.0..=ASP_MAX_THETA).contains(&self.asp_theta) {
             return Err(ParameterizeChartsError::InvalidOption {
                 option: "asp_theta",
                 detail: format!(

@@ -44,18 +44,18 @@
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.3 (area-ratio threshold 2).
 use std::sync::Arc;
 
+use super::asp::{relax_chart_asp_hierarchical, AspStats, MAX_SWEEPS};
+use super::defects::find_defect;
 use super::defects::ChartDefect;
 use super::degenerate::{flatten_around_degenerate, line_map, split_off_degenerate, Attempt};
 use super::merge::merge_back;
+use super::options::Parameterization;
 use super::schedule::in_parallel_largest_first;
 use super::split::split_for;
 use super::stretch::{
     optimize_chart_stretch, zero_model_area, ChartStretchOutcome, StretchChart,
     StretchOptimization, StretchStats,
 };
-use super::asp::{relax_chart_asp_hierarchical, AspStats, MAX_SWEEPS};
-use super::defects::find_defect;
-use super::options::Parameterization;
 use super::warm_start::restrict_map;
 use super::{chart_mesh, conformal_energy, flipped_faces};
 use super::{LocatedMap, ParameterizeChartsError, ParameterizeOptions};

@@ -411,8 +411,7 @@ impl<'a> State<'a> {
             }
         }
         let solid_face: Vec<bool> = frames.iter().map(Option::is_some).collect();
-        let (segs, on_boundary, vertex_segs) =
-            boundary_segments(n, chart.triangles, &solid_face)?;
+        let (segs, on_boundary, vertex_segs) = boundary_segments(n, chart.triangles, &solid_face)?;
         let a3_total = frames.iter().flatten().map(|f| f.a3).sum();
         let nf = chart.triangles.len();
         Some(Self {
@@ -894,7 +893,12 @@ pub(super) struct BoundaryView<'a> {
 /// Whether moving the boundary vertex `v` to `p` keeps the boundary simple (its two segments
 /// cross no other) and every boundary vertex of its fan unfolded (UV angle sum below 2π −
 /// `FOLD_MARGIN_RAD`). Cost: O(boundary segments + fan).
-pub(super) fn boundary_move_ok(b: &BoundaryView<'_>, uv: &[[f64; 2]], v: usize, p: [f64; 2]) -> bool {
+pub(super) fn boundary_move_ok(
+    b: &BoundaryView<'_>,
+    uv: &[[f64; 2]],
+    v: usize,
+    p: [f64; 2],
+) -> bool {
     let pos = |i: u32| if i as usize == v { p } else { uv[i as usize] };
     let Some(own) = b.vertex_segs.get(v) else {
         return false;

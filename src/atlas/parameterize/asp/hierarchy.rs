@@ -129,7 +129,11 @@ fn hierarchical(
             triangles: &level.chart.triangles,
             zero_area: &zero,
         };
-        let mut luv: Vec<[f64; 2]> = level.chart_vertex.iter().map(|&v| cur[v as usize]).collect();
+        let mut luv: Vec<[f64; 2]> = level
+            .chart_vertex
+            .iter()
+            .map(|&v| cur[v as usize])
+            .collect();
         if started {
             let ins: Vec<bool> = level
                 .chart_vertex

@@ -134,7 +134,10 @@ fn chart_energy_sums_the_face_oracle_and_isometry_is_its_minimum() {
         let e = asp_energy(&sc, &uv, theta).unwrap();
         // The isometric unrolling: σ1 = σ2 = 1, so E = 2·2^θ per unit area.
         let expect = area * 2.0 * 2f64.powf(theta);
-        assert!((e - expect).abs() < 1e-9 * expect, "θ {theta}: {e} vs {expect}");
+        assert!(
+            (e - expect).abs() < 1e-9 * expect,
+            "θ {theta}: {e} vs {expect}"
+        );
         // A uniform scaling keeps the MIPS energy and raises the others.
         let scaled: Vec<[f64; 2]> = uv.iter().map(|p| [1.3 * p[0], 1.3 * p[1]]).collect();
         let es = asp_energy(&sc, &scaled, theta).unwrap();
@@ -232,7 +235,10 @@ fn developable_patch_comes_out_isometric() {
             let out = relax_until(&sc, &mut uv, theta, 2000, 0.0);
             assert!(out.relaxed && out.sweeps_undone == 0, "{name}: {out:?}");
             let err = max_edge_error(&chart, &uv);
-            assert!(err < 2e-3, "{name} θ {theta}: edge length error {err} ({out:?})");
+            assert!(
+                err < 2e-3,
+                "{name} θ {theta}: edge length error {err} ({out:?})"
+            );
         }
     }
 }
@@ -265,7 +271,11 @@ fn check_never_flips(c: &Case, theta: f64, sweeps: usize) -> Result<(), TestCase
         && vertex_fold(&solid, &c.uv).is_none();
     let mut uv = c.uv.clone();
     let out = relax_chart_asp(&chart, &mut uv, theta, sweeps);
-    prop_assert_eq!(out.sweeps_undone, 0, "a per-move test let an invalid move through");
+    prop_assert_eq!(
+        out.sweeps_undone,
+        0,
+        "a per-move test let an invalid move through"
+    );
     if !out.relaxed {
         prop_assert_eq!(&uv, &c.uv, "not relaxed but the map changed");
         prop_assert!(!start_valid, "a valid start was refused: {:?}", out);
@@ -278,8 +288,7 @@ fn check_never_flips(c: &Case, theta: f64, sweeps: usize) -> Result<(), TestCase
         if !z {
             a2 += 0.5 * signed2(&c.uv, *t);
             let p = t.map(|i| c.chart.positions_m[i as usize]);
-            a3 += inverse_singular_values(p, t.map(|i| c.uv[i as usize]))
-                .map_or(0.0, |x| x.2);
+            a3 += inverse_singular_values(p, t.map(|i| c.uv[i as usize])).map_or(0.0, |x| x.2);
         }
     }
     let s = (a3 / a2).sqrt();
@@ -304,12 +313,21 @@ fn check_never_flips(c: &Case, theta: f64, sweeps: usize) -> Result<(), TestCase
     for ((t, &z), k) in c.chart.triangles.iter().zip(&c.zero).zip(0..) {
         let (a0, a1) = (signed2(&scaled, *t), signed2(&uv, *t));
         if z {
-            prop_assert!(a1 >= a0.min(0.0), "zero-area face {} flipped: {} -> {}", k, a0, a1);
+            prop_assert!(
+                a1 >= a0.min(0.0),
+                "zero-area face {} flipped: {} -> {}",
+                k,
+                a0,
+                a1
+            );
         } else {
             prop_assert!(a1 > 0.0, "face {} flipped", k);
         }
     }
-    prop_assert!(boundary_crossing(&solid, &uv).is_none(), "boundary crosses itself");
+    prop_assert!(
+        boundary_crossing(&solid, &uv).is_none(),
+        "boundary crosses itself"
+    );
     prop_assert!(vertex_fold(&solid, &uv).is_none(), "a vertex folds");
     Ok(())
 }
@@ -375,8 +393,10 @@ fn lowers_area_distortion_of_lscm_maps_deterministically() {
         let mut again = map.uv.clone();
         let out2 = relax_chart_asp(&sc, &mut again, 1.0, MAX_SWEEPS);
         assert_eq!(out, out2);
-        assert!(uv.iter().zip(&again).all(|(a, b)| a[0].to_bits() == b[0].to_bits()
-            && a[1].to_bits() == b[1].to_bits()));
+        assert!(uv
+            .iter()
+            .zip(&again)
+            .all(|(a, b)| a[0].to_bits() == b[0].to_bits() && a[1].to_bits() == b[1].to_bits()));
     }
 }
 
