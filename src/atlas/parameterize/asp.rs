@@ -23,7 +23,7 @@
 //! boundary: a boundary vertex moves like an interior one, and a move is kept only if its two
 //! boundary segments cross no other and no boundary vertex of its ring folds (the stretch
 //! optimiser's guard, `stretch::boundary_move_ok`); otherwise the step is halved, at most
-//! [`BOUNDARY_RETRIES`] times. The start is the stage's LSCM map scaled to UV area = model area
+//! `BOUNDARY_RETRIES` times. The start is the stage's LSCM map scaled to UV area = model area
 //! (a similarity: the start stays flip-free and the area term starts near its minimum).
 //!
 //! Deviations from the paper:
