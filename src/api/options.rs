@@ -6,7 +6,7 @@
 //! refused, so a typo is an error rather than a silently ignored option.
 use serde::{Deserialize, Serialize};
 
-use crate::atlas::parameterize::{ParameterizeMethod, StretchOptimization};
+use crate::atlas::parameterize::{Parameterization, ParameterizeMethod, StretchOptimization};
 use crate::atlas::{AtlasError, AtlasOptions, TexelDensity};
 use crate::gltf_io::{OutputFormat, UvTarget};
 
@@ -55,6 +55,18 @@ pub enum StretchOptimizationJson {
     Global,
     /// The global descent, then Sander et al. 2001's vertex moves: L∞ stretch first, then L2.
     LinfL2,
+}
+
+/// How the final chart maps are made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ParameterizationJson {
+    /// Least squares conformal maps (the default).
+    #[default]
+    Lscm,
+    /// ASP (Degener et al. 2003): the LSCM maps relaxed for the angle/area energy with θ =
+    /// `asp_theta`.
+    Asp,
 }
 
 /// Where the atlas UVs go.
@@ -158,6 +170,13 @@ pub struct OptionsJson {
     /// Passes of each phase of the stretch optimisation (L∞, then L2), >= 1. Default 4.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stretch_passes: Option<u32>,
+    /// The parameterization of the final maps, default `lscm`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parameterization: Option<ParameterizationJson>,
+    /// ASP's θ (area weight against angles), in `[0, 8]`. Default 1. Read with
+    /// `parameterization: asp`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub asp_theta: Option<f64>,
     /// Which `TEXCOORD_k` receives the atlas on every triangle primitive, default
     /// `"first_free"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -250,6 +269,13 @@ impl OptionsJson {
         if let Some(n) = self.stretch_passes {
             atlas.parameterize.stretch_passes = n;
         }
+        atlas.parameterize.parameterization = match self.parameterization.unwrap_or_default() {
+            ParameterizationJson::Lscm => Parameterization::Lscm,
+            ParameterizationJson::Asp => Parameterization::Asp,
+        };
+        if let Some(t) = self.asp_theta {
+            atlas.parameterize.asp_theta = t;
+        }
         atlas.check()?;
         let uv_target = match self.uv_set {
             None | Some(UvSetJson::Named(UvSetName::FirstFree)) => UvTarget::FirstFree,
@@ -306,6 +332,11 @@ impl OptionsJson {
                 StretchOptimization::LinfL2 => StretchOptimizationJson::LinfL2,
             }),
             stretch_passes: Some(a.parameterize.stretch_passes),
+            parameterization: Some(match a.parameterize.parameterization {
+                Parameterization::Lscm => ParameterizationJson::Lscm,
+                Parameterization::Asp => ParameterizationJson::Asp,
+            }),
+            asp_theta: Some(a.parameterize.asp_theta),
             uv_set: Some(match settings.uv_target {
                 UvTarget::FirstFree => UvSetJson::Named(UvSetName::FirstFree),
                 UvTarget::Replace(k) => UvSetJson::Index(k),
@@ -337,7 +368,8 @@ mod tests {
             "rotations":4,"max_charts":12,"max_stretch":1.2,"max_area_ratio":3.0,"merge_passes":2,
             "merge_max_chart_fraction":0.25,"feature_fraction":0.1,"border_band_fraction":0.2,
             "hard_edge_angle_deg":45.5,"solver":"hierarchical","stretch_optimization":"linf_l2",
-            "stretch_passes":7,"uv_set":2,"output_format":"gltf"}"#;
+            "stretch_passes":7,"parameterization":"asp","asp_theta":0.75,"uv_set":2,
+            "output_format":"gltf"}"#;
         let o: OptionsJson = serde_json::from_str(text).unwrap();
         let s = o.to_settings().unwrap();
         assert_eq!(
@@ -367,6 +399,8 @@ mod tests {
             StretchOptimization::LinfL2
         );
         assert_eq!(s.atlas.parameterize.stretch_passes, 7);
+        assert_eq!(s.atlas.parameterize.parameterization, Parameterization::Asp);
+        assert_eq!(s.atlas.parameterize.asp_theta, 0.75);
         assert_eq!(s.uv_target, UvTarget::Replace(2));
         assert_eq!(s.format, OutputFormat::Gltf);
         assert_eq!(OptionsJson::effective(&s), o);
@@ -415,6 +449,11 @@ mod tests {
             (r#"{"hard_edge_angle_deg":0}"#, "hard_edge_angle_deg"),
             (r#"{"hard_edge_angle_deg":181}"#, "hard_edge_angle_deg"),
             (r#"{"max_charts":0}"#, "max_charts"),
+            (
+                r#"{"parameterization":"asp","asp_theta":-0.5}"#,
+                "asp_theta",
+            ),
+            (r#"{"parameterization":"asp","asp_theta":9}"#, "asp_theta"),
         ] {
             let o: OptionsJson = serde_json::from_str(text).unwrap();
             match o.to_settings() {

@@ -120,6 +120,15 @@ pub struct PipelineJson {
     pub charts_stretch_optimized: usize,
     /// Vertex moves it kept, over all charts.
     pub stretch_vertex_moves: usize,
+    /// The parameterization of the final maps: `lscm` (conformal) or `asp` (Degener et al.
+    /// 2003, the LSCM maps relaxed for an angle/area trade-off).
+    pub parameterization: &'static str,
+    /// ASP's θ (area weight) when `parameterization` is `asp`, else `null`.
+    pub asp_theta: Option<f64>,
+    /// Charts whose ASP map was kept.
+    pub charts_asp: usize,
+    /// Charts that kept their LSCM map because the ASP map failed the validation bounds.
+    pub charts_asp_kept_lscm: usize,
     /// The flip promise's last line of defence: 3-D-degenerate faces whose written UV triangle
     /// had area and was collapsed to a segment.
     pub uv_collapsed_faces: usize,
@@ -214,6 +223,10 @@ impl ReportJson {
                 stretch_optimization: s.stretch_optimization.name(),
                 charts_stretch_optimized: s.stretch.charts_optimized,
                 stretch_vertex_moves: s.stretch.moves,
+                parameterization: s.parameterization.name(),
+                asp_theta: s.asp_theta,
+                charts_asp: s.asp.charts_relaxed,
+                charts_asp_kept_lscm: s.asp.charts_kept_lscm,
                 uv_collapsed_faces: s.uv_collapsed_faces,
                 uv_nudged_vertices: s.uv_nudged_vertices,
                 uv_guard_splits: s.uv_guard_splits,

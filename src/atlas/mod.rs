@@ -90,6 +90,12 @@ pub struct PipelineStats {
     pub stretch_optimization: parameterize::StretchOptimization,
     /// What it did: charts optimised and skipped, vertex moves kept.
     pub stretch: parameterize::StretchStats,
+    /// The parameterization of the final maps (`lscm`, or `asp` with θ; `parameterize::asp`).
+    pub parameterization: parameterize::Parameterization,
+    /// ASP's θ when `parameterization` is ASP.
+    pub asp_theta: Option<f64>,
+    /// What ASP did: charts whose relaxed map was kept, charts that kept their LSCM map.
+    pub asp: parameterize::AspStats,
     /// The last line of defence (`uv_guard.rs`): 3-D-degenerate faces whose written UV triangle
     /// had area and was collapsed to a segment.
     pub uv_collapsed_faces: usize,
@@ -189,6 +195,10 @@ pub fn generate(
         packing_cuts,
         stretch_optimization: options.parameterize.stretch_optimization,
         stretch: parameterized.stretch,
+        parameterization: options.parameterize.parameterization,
+        asp_theta: (options.parameterize.parameterization == parameterize::Parameterization::Asp)
+            .then_some(options.parameterize.asp_theta),
+        asp: parameterized.asp,
         ..PipelineStats::default()
     };
     for (chart, defect) in &parameterized.unresolved {

@@ -11,8 +11,8 @@ use std::process::ExitCode;
 use anyhow::{bail, Context as _};
 use indicatif::{ProgressBar, ProgressStyle};
 use texatlas::api::{
-    OptionsJson, OutputFormatJson, ResolutionJson, SolverJson, StretchOptimizationJson, UvSetJson,
-    UvSetName,
+    OptionsJson, OutputFormatJson, ParameterizationJson, ResolutionJson, SolverJson,
+    StretchOptimizationJson, UvSetJson, UvSetName,
 };
 use texatlas::atlas::{Progress, Stage};
 use texatlas::preview::{preview_size_px, render_preview};
@@ -101,6 +101,14 @@ pub struct OptionFlags {
     /// Passes of each vertex phase of linf_l2 (>= 1). Default 4.
     #[arg(long)]
     pub stretch_passes: Option<u32>,
+    /// Parameterization of the final maps: lscm (conformal) or asp (Degener et al. 2003: the
+    /// LSCM maps relaxed for an angle/area trade-off, see --asp-theta). Default lscm.
+    #[arg(long, value_parser = parse_parameterization)]
+    pub parameterization: Option<ParameterizationJson>,
+    /// ASP's θ, the weight of area against angles, in [0, 8]: 0 keeps angles only (MIPS),
+    /// larger values keep area more. Default 1. Used with --parameterization asp.
+    #[arg(long)]
+    pub asp_theta: Option<f64>,
     /// Which TEXCOORD_k receives the atlas, one set for every primitive: `first_free` (the
     /// lowest set no primitive has) or a set number k to replace. Default first_free.
     #[arg(long, value_parser = parse_uv_set)]
@@ -129,6 +137,8 @@ impl OptionFlags {
             solver: self.solver,
             stretch_optimization: self.stretch_optimization,
             stretch_passes: self.stretch_passes,
+            parameterization: self.parameterization,
+            asp_theta: self.asp_theta,
             uv_set: self.uv_set,
             output_format: self.output_format,
         }
@@ -192,6 +202,14 @@ fn parse_stretch_optimization(s: &str) -> Result<StretchOptimizationJson, String
         _ => Err(format!(
             "`{s}` is not a stretch optimisation; use global, linf_l2 or none"
         )),
+    }
+}
+
+fn parse_parameterization(s: &str) -> Result<ParameterizationJson, String> {
+    match s {
+        "lscm" => Ok(ParameterizationJson::Lscm),
+        "asp" => Ok(ParameterizationJson::Asp),
+        _ => Err(format!("`{s}` is not a parameterization; use lscm or asp")),
     }
 }
 

@@ -29,6 +29,8 @@
 //! - `warm_start`: a split part keeps its parent's map when that map is valid for it;
 //! - `merge`: the merge-back of valid charts into a neighbour; `schedule`: the largest-first
 //!   parallel map and the speculative flattening of merge tries;
+//! - [`asp`]: optionally, after validation, every valid chart's LSCM map relaxed for the ASP
+//!   angle/area energy (Degener et al. 2003), kept only when it passes the stage's tests;
 //! - [`stretch`]: last, optionally, the stretch optimisation of every valid chart's map (Sander et al. 2001:
 //!   L∞ then L2, vertex moves inside the no-flip kernel), which keeps every guarantee below.
 //!
@@ -36,6 +38,7 @@
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §2–§3.3; N. Ray, B. Lévy, "Hierarchical
 //! Least Squares Conformal Map", Pacific Graphics 2003; P. Sander, J. Snyder, S. Gortler, H.
 //! Hoppe, "Texture Mapping Progressive Meshes", SIGGRAPH 2001 (the L2 stretch).
+pub mod asp;
 pub mod chart;
 pub mod defects;
 mod degenerate;
@@ -58,13 +61,17 @@ mod warm_start;
 #[cfg(test)]
 mod tests;
 
+pub use asp::{asp_energy, relax_chart_asp, relax_chart_asp_hierarchical, AspOutcome, AspStats};
 pub use chart::{ChartMesh, ChartTopology};
 pub use defects::{boundary_crossing, vertex_fold, ChartDefect};
 pub use extract::chart_mesh;
 pub use flatten::{flatten_chart, ChartMap, FlattenOptions, LocatedMap, ParameterizeMethod};
 pub use hlscm::{HlscmLevel, HlscmOptions, HlscmReport, HlscmSmoother};
 pub use lscm::{conformal_energy, flipped_faces, LscmSystem, Pin};
-pub use options::{ParameterizeOptions, LATE_MERGE_MAX_FACES, MERGE_CAP_FLOOR_FACES};
+pub use options::{
+    Parameterization, ParameterizeOptions, ASP_MAX_THETA, LATE_MERGE_MAX_FACES,
+    MERGE_CAP_FLOOR_FACES,
+};
 pub use stage::{parameterize_charts, ParameterizedCharts};
 pub use stretch::{optimize_chart_stretch, StretchChart, StretchOptimization, StretchStats};
 

@@ -56,7 +56,42 @@ pub struct ParameterizeOptions {
     /// vertex of every chart once (the L∞ phase only those near the chart's maximum); later
     /// passes gain less.
     pub stretch_passes: u32,
+    /// Which energy the final maps minimise: [`Parameterization::Lscm`] (conformal, the
+    /// default) or [`Parameterization::Asp`] (Degener et al. 2003, `super::asp`: after
+    /// validation, every valid chart's LSCM map is relaxed for an angle/area trade-off, and kept
+    /// only when it still passes the stage's tests).
+    pub parameterization: Parameterization,
+    /// ASP's θ, the weight of area against angle preservation (`super::asp`): 0 is the MIPS
+    /// energy (angles only), larger values keep area at the cost of angles. Dimensionless, in
+    /// `[0, ASP_MAX_THETA]`. Default 1 (the paper's "uniform sampling" energy
+    /// `σ1² + σ2² + σ1⁻² + σ2⁻²`). Read only with [`Parameterization::Asp`].
+    pub asp_theta: f64,
 }
+
+/// How the final chart maps are made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Parameterization {
+    /// Least squares conformal maps (Lévy et al. 2002): angles kept, area free.
+    #[default]
+    Lscm,
+    /// ASP (Degener et al. 2003): each valid chart's LSCM map relaxed for the energy
+    /// `E_angle · E_area^θ` inside the no-flip kernel (`super::asp`).
+    Asp,
+}
+
+impl Parameterization {
+    /// The wire name (`lscm`, `asp`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Lscm => "lscm",
+            Self::Asp => "asp",
+        }
+    }
+}
+
+/// Largest accepted [`ParameterizeOptions::asp_theta`]: the paper reports numerical problems
+/// (strongly sheared triangles) for high θ, and above it the area term swamps the angle term.
+pub const ASP_MAX_THETA: f64 = 8.0;
 
 /// Which stretch optimisation runs on every chart's map after validation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -104,6 +139,8 @@ impl Default for ParameterizeOptions {
             flatten: FlattenOptions::default(),
             stretch_optimization: StretchOptimization::Global,
             stretch_passes: 4,
+            parameterization: Parameterization::Lscm,
+            asp_theta: 1.0,
         }
     }
 }
@@ -153,6 +190,16 @@ impl ParameterizeOptions {
                 detail: format!(
                     "{} is not a pass count in 1..=64; use e.g. 4, or stretch_optimization none",
                     self.stretch_passes
+                ),
+            });
+        }
+        if !(0.0..=ASP_MAX_THETA).contains(&self.asp_theta) {
+            return Err(ParameterizeChartsError::InvalidOption {
+                option: "asp_theta",
+                detail: format!(
+                    "{} is not a weight in [0, {ASP_MAX_THETA}]; use e.g. 1.0 (area and angle \
+                     alike), 0 for angles only (MIPS), or a larger value to keep area more",
+                    self.asp_theta
                 ),
             });
         }

@@ -44,9 +44,12 @@
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.3 (area-ratio threshold 2).
 use std::sync::Arc;
 
+use super::asp::{relax_chart_asp_hierarchical, AspStats, MAX_SWEEPS};
+use super::defects::find_defect;
 use super::defects::ChartDefect;
 use super::degenerate::{flatten_around_degenerate, line_map, split_off_degenerate, Attempt};
 use super::merge::merge_back;
+use super::options::Parameterization;
 use super::schedule::in_parallel_largest_first;
 use super::split::split_for;
 use super::stretch::{
@@ -54,7 +57,7 @@ use super::stretch::{
     StretchOptimization, StretchStats,
 };
 use super::warm_start::restrict_map;
-use super::{chart_mesh, conformal_energy};
+use super::{chart_mesh, conformal_energy, flipped_faces};
 use super::{LocatedMap, ParameterizeChartsError, ParameterizeOptions};
 use crate::atlas::progress::StageProgress;
 use crate::atlas::segment::{disk_check, enforce_disks, finish, SegmentStats, Segmentation};
@@ -88,6 +91,8 @@ pub struct ParameterizedCharts {
     pub merges: usize,
     /// What the stretch optimisation of the final maps did (`super::stretch`).
     pub stretch: StretchStats,
+    /// What ASP did to the final maps (`super::asp`; zero with [`Parameterization::Lscm`]).
+    pub asp: AspStats,
 }
 
 /// The parameterize stage: flattens every chart of `seg`, splits invalid ones until all are
@@ -208,7 +213,12 @@ pub fn parameterize_charts(
         degenerate_faces,
         merges,
         stretch: StretchStats::default(),
+        asp: AspStats::default(),
     };
+    // On the final valid maps: ASP (a map is kept only when it passes the stage's tests).
+    if options.parameterization == Parameterization::Asp {
+        result.asp = relax_asp_charts(mesh, &mut result, options);
+    }
     // Last, on the final valid maps: the stretch optimisation (it keeps every guarantee).
     result.stretch = optimize_stretch_charts(
         mesh,
@@ -390,6 +400,106 @@ pub(super) fn optimize_stretch_charts(
         if let (Some((uv, energy)), Some((map, _))) = (new, v.maps[i].as_mut()) {
             map.uv = uv;
             map.conformal_energy = energy;
+        }
+    }
+    stats
+}
+
+/// One chart's ASP result: its index, its new UVs and conformal energy when kept, the outcome.
+type AspResult = (usize, Option<(Vec<[f64; 2]>, f64)>, super::AspOutcome);
+
+/// Relaxes every valid chart's map of `v` for ASP (`super::asp`) with θ =
+/// `options.asp_theta`; charts in parallel, results in chart order (deterministic). A relaxed
+/// map replaces the chart's map only when it passes the stage's tests (`find_defect`: flips,
+/// boundary crossings, folds, and the stretch or area-ratio bound); charts with zero-area faces
+/// (which `find_defect`'s chart validation rejects) are checked against the stretch bound with
+/// `stretch::chart_stretch` instead, and left alone under the area-ratio test. Charts listed in
+/// `v.unresolved` are left alone.
+pub(super) fn relax_asp_charts(
+    mesh: &TriangleMesh,
+    v: &mut ParameterizedCharts,
+    options: &ParameterizeOptions,
+) -> AspStats {
+    let mut stats = AspStats::default();
+    let bad: Vec<usize> = v.unresolved.iter().map(|(c, _)| *c).collect();
+    let charts = &v.segmentation.charts;
+    let mut order: Vec<usize> = (0..charts.len()).filter(|i| !bad.contains(i)).collect();
+    // Largest first, so that a big chart does not start last; results go back by index.
+    order.sort_by_key(|&i| (std::cmp::Reverse(charts[i].len()), i));
+    let maps = &v.maps;
+    let results: Vec<AspResult> = order
+        .into_par_iter()
+        .with_max_len(1)
+        .map(|i| {
+            let faces = &charts[i];
+            let none = (i, None, super::AspOutcome::default());
+            let Some((map, _)) = maps[i].as_ref() else {
+                return none;
+            };
+            let (cm, _) = chart_mesh(mesh, faces);
+            let zero_area: Vec<bool> = faces
+                .iter()
+                .zip(&cm.triangles)
+                .map(|(&f, t)| mesh.face_degeneracy(f).is_some() || zero_model_area(&cm, t))
+                .collect();
+            if map.uv.len() != cm.positions_m.len() {
+                return none;
+            }
+            let mut uv = map.uv.clone();
+            let chart = StretchChart {
+                positions_m: &cm.positions_m,
+                triangles: &cm.triangles,
+                zero_area: &zero_area,
+            };
+            let outcome =
+                relax_chart_asp_hierarchical(&chart, &mut uv, options.asp_theta, MAX_SWEEPS);
+            if !outcome.relaxed {
+                return (i, None, outcome);
+            }
+            let passes = match cm.validate() {
+                Ok(topology) => {
+                    let mut candidate = map.clone();
+                    candidate.flipped_faces = flipped_faces(&cm, &uv);
+                    candidate.uv = uv.clone();
+                    find_defect(faces, &cm, &topology.boundary_loop, &candidate, options).is_none()
+                }
+                Err(_) => {
+                    options.max_area_ratio.is_none()
+                        && match (
+                            super::stretch::chart_stretch(&chart, &uv),
+                            options.max_stretch,
+                        ) {
+                            (Some((l2, _)), Some(bound)) => l2 <= bound,
+                            (Some(_), None) => true,
+                            (None, _) => false,
+                        }
+                }
+            };
+            if !passes {
+                return (i, None, outcome);
+            }
+            let energy = conformal_energy(&cm, &uv);
+            (i, Some((uv, energy)), outcome)
+        })
+        .collect();
+    let mut by_chart: Vec<Option<AspResult>> = (0..charts.len()).map(|_| None).collect();
+    for r in results {
+        let i = r.0;
+        by_chart[i] = Some(r);
+    }
+    for (i, r) in by_chart.into_iter().enumerate() {
+        let Some((_, new, outcome)) = r else {
+            continue;
+        };
+        match (new, v.maps[i].as_mut()) {
+            (Some((uv, energy)), Some((map, _))) => {
+                map.uv = uv;
+                map.conformal_energy = energy;
+                stats.charts_relaxed += 1;
+                stats.moves += outcome.moves;
+                stats.sweeps += outcome.sweeps;
+            }
+            _ => stats.charts_kept_lscm += 1,
         }
     }
     stats

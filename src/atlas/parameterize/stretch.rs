@@ -164,10 +164,10 @@ fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
         a[0] * b[1] - a[1] * b[0],
     ]
 }
-fn cross2(a: [f64; 2], b: [f64; 2]) -> f64 {
+pub(super) fn cross2(a: [f64; 2], b: [f64; 2]) -> f64 {
     a[0] * b[1] - a[1] * b[0]
 }
-fn sub2(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+pub(super) fn sub2(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
     [a[0] - b[0], a[1] - b[1]]
 }
 
@@ -227,14 +227,14 @@ impl FrameFace {
 }
 
 /// Per-vertex incidence: the faces around each vertex and the vertex's corner in each.
-struct Incidence {
-    ptr: Vec<usize>,
-    face: Vec<u32>,
-    corner: Vec<u8>,
+pub(super) struct Incidence {
+    pub(super) ptr: Vec<usize>,
+    pub(super) face: Vec<u32>,
+    pub(super) corner: Vec<u8>,
 }
 
 impl Incidence {
-    fn new(n: usize, triangles: &[[u32; 3]]) -> Self {
+    pub(super) fn new(n: usize, triangles: &[[u32; 3]]) -> Self {
         let mut ptr = vec![0usize; n + 1];
         for t in triangles {
             for &v in t {
@@ -256,7 +256,7 @@ impl Incidence {
         }
         Self { ptr, face, corner }
     }
-    fn of(&self, v: usize) -> impl Iterator<Item = (usize, usize)> + '_ {
+    pub(super) fn of(&self, v: usize) -> impl Iterator<Item = (usize, usize)> + '_ {
         (self.ptr[v]..self.ptr[v + 1]).map(|k| (self.face[k] as usize, self.corner[k] as usize))
     }
 }
@@ -439,48 +439,8 @@ impl<'a> State<'a> {
                 movable[v as usize] = true;
             }
         }
-        // Boundary half-edges of the positive-area faces (reverse absent); each directed edge
-        // once, each boundary vertex with one outgoing and one incoming segment.
-        let mut directed: Vec<(u32, u32)> = Vec::with_capacity(3 * solid_tris.len());
-        for t in &solid_tris {
-            for s in 0..3 {
-                directed.push((t[s], t[(s + 1) % 3]));
-            }
-        }
-        let mut sorted = directed.clone();
-        sorted.sort_unstable();
-        if sorted.windows(2).any(|w| w[0] == w[1]) {
-            return None;
-        }
-        let mut segs = Vec::new();
-        let mut on_boundary = vec![false; n];
-        let mut vertex_segs = vec![[u32::MAX; 2]; n];
-        for (k, t) in chart
-            .triangles
-            .iter()
-            .enumerate()
-            .filter(|(k, _)| frames[*k].is_some())
-        {
-            for s in 0..3 {
-                let (a, b) = (t[s], t[(s + 1) % 3]);
-                if sorted.binary_search(&(b, a)).is_err() {
-                    let i = segs.len() as u32;
-                    segs.push((a, b, k));
-                    on_boundary[a as usize] = true;
-                    on_boundary[b as usize] = true;
-                    let (sa, sb) = (&mut vertex_segs[a as usize][0], i);
-                    if *sa != u32::MAX {
-                        return None;
-                    }
-                    *sa = sb;
-                    let slot = &mut vertex_segs[b as usize][1];
-                    if *slot != u32::MAX {
-                        return None;
-                    }
-                    *slot = i;
-                }
-            }
-        }
+        let solid_face: Vec<bool> = frames.iter().map(Option::is_some).collect();
+        let (segs, on_boundary, vertex_segs) = boundary_segments(n, chart.triangles, &solid_face)?;
         let a3_total = frames.iter().flatten().map(|f| f.a3).sum();
         let nf = chart.triangles.len();
         Some(Self {
@@ -762,63 +722,21 @@ impl<'a> State<'a> {
     }
 
     /// Whether moving the boundary vertex `v` to `p` keeps the boundary simple and every
-    /// boundary vertex of its fan unfolded.
+    /// boundary vertex of its fan unfolded ([`boundary_move_ok`]).
     fn boundary_ok(&self, uv: &[[f64; 2]], v: usize, p: [f64; 2]) -> bool {
-        let pos = |i: u32| if i as usize == v { p } else { uv[i as usize] };
-        for &si in &self.vertex_segs[v] {
-            let Some(&(a, b, _)) = self.segs.get(si as usize) else {
-                return false;
-            };
-            let (pa, pb) = (pos(a), pos(b));
-            let (lo, hi) = (
-                [pa[0].min(pb[0]), pa[1].min(pb[1])],
-                [pa[0].max(pb[0]), pa[1].max(pb[1])],
-            );
-            for &(c, d, _) in &self.segs {
-                if c == a || c == b || d == a || d == b {
-                    continue;
-                }
-                let (pc, pd) = (pos(c), pos(d));
-                if pc[0].max(pd[0]) < lo[0]
-                    || pc[0].min(pd[0]) > hi[0]
-                    || pc[1].max(pd[1]) < lo[1]
-                    || pc[1].min(pd[1]) > hi[1]
-                {
-                    continue;
-                }
-                if segments_intersect(pa, pb, pc, pd) {
-                    return false;
-                }
-            }
-        }
-        // Angle sums at the boundary vertices whose angles change: `v` and its fan's corners.
-        let mut check = vec![v as u32];
-        for (f, _) in self.inc.of(v) {
-            if self.frames[f].is_some() {
-                for &w in &self.chart.triangles[f] {
-                    if self.on_boundary[w as usize] && !check.contains(&w) {
-                        check.push(w);
-                    }
-                }
-            }
-        }
-        let limit = std::f64::consts::TAU - FOLD_MARGIN_RAD;
-        for &w in &check {
-            let mut sum = 0.0;
-            for (f, c) in self.inc.of(w as usize) {
-                if self.frames[f].is_none() {
-                    continue;
-                }
-                let t = self.chart.triangles[f];
-                let (pw, pa, pb) = (pos(t[c]), pos(t[(c + 1) % 3]), pos(t[(c + 2) % 3]));
-                let (e1, e2) = (sub2(pa, pw), sub2(pb, pw));
-                sum += cross2(e1, e2).atan2(e1[0] * e2[0] + e1[1] * e2[1]).abs();
-            }
-            if !exceeds(limit, sum) {
-                return false;
-            }
-        }
-        true
+        boundary_move_ok(
+            &BoundaryView {
+                segs: &self.segs,
+                vertex_segs: &self.vertex_segs,
+                on_boundary: &self.on_boundary,
+                inc: &self.inc,
+                triangles: self.chart.triangles,
+                solid: &|f| self.frames[f].is_some(),
+            },
+            uv,
+            v,
+            p,
+        )
     }
 
     /// Moves `v` to `p` and updates the maintained values (`l0`, `l`: its fan before, after).
@@ -1011,6 +929,136 @@ pub fn chart_stretch(chart: &StretchChart<'_>, uv: &[[f64; 2]]) -> Option<(f64, 
     ))
 }
 
+/// Boundary segments `(a, b, owning triangle)` of the faces flagged `solid`, the boundary
+/// flag of every vertex, and each boundary vertex's (outgoing, incoming) segment indices;
+/// `None` when a directed edge repeats or a vertex has two outgoing or two incoming boundary
+/// segments (the solid faces are not a manifold disk there). Shared by the stretch optimiser and
+/// ASP (`super::asp`).
+#[allow(clippy::type_complexity)]
+pub(super) fn boundary_segments(
+    n: usize,
+    triangles: &[[u32; 3]],
+    solid: &[bool],
+) -> Option<(Vec<(u32, u32, usize)>, Vec<bool>, Vec<[u32; 2]>)> {
+    // Boundary half-edges of the solid faces (reverse absent); each directed edge once, each
+    // boundary vertex with one outgoing and one incoming segment.
+    let mut sorted: Vec<(u32, u32)> = Vec::with_capacity(3 * triangles.len());
+    for (t, _) in triangles.iter().zip(solid).filter(|(_, &s)| s) {
+        for s in 0..3 {
+            sorted.push((t[s], t[(s + 1) % 3]));
+        }
+    }
+    sorted.sort_unstable();
+    if sorted.windows(2).any(|w| w[0] == w[1]) {
+        return None;
+    }
+    let mut segs = Vec::new();
+    let mut on_boundary = vec![false; n];
+    let mut vertex_segs = vec![[u32::MAX; 2]; n];
+    for (k, t) in triangles.iter().enumerate().filter(|(k, _)| solid[*k]) {
+        for s in 0..3 {
+            let (a, b) = (t[s], t[(s + 1) % 3]);
+            if sorted.binary_search(&(b, a)).is_err() {
+                let i = segs.len() as u32;
+                segs.push((a, b, k));
+                *on_boundary.get_mut(a as usize)? = true;
+                *on_boundary.get_mut(b as usize)? = true;
+                let slot = &mut vertex_segs.get_mut(a as usize)?[0];
+                if *slot != u32::MAX {
+                    return None;
+                }
+                *slot = i;
+                let slot = &mut vertex_segs.get_mut(b as usize)?[1];
+                if *slot != u32::MAX {
+                    return None;
+                }
+                *slot = i;
+            }
+        }
+    }
+    Some((segs, on_boundary, vertex_segs))
+}
+
+/// What [`boundary_move_ok`] reads: the boundary of the solid faces ([`boundary_segments`]),
+/// the incidence, and which faces are solid.
+pub(super) struct BoundaryView<'a> {
+    pub(super) segs: &'a [(u32, u32, usize)],
+    pub(super) vertex_segs: &'a [[u32; 2]],
+    pub(super) on_boundary: &'a [bool],
+    pub(super) inc: &'a Incidence,
+    pub(super) triangles: &'a [[u32; 3]],
+    pub(super) solid: &'a dyn Fn(usize) -> bool,
+}
+
+/// Whether moving the boundary vertex `v` to `p` keeps the boundary simple (its two segments
+/// cross no other) and every boundary vertex of its fan unfolded (UV angle sum below 2π −
+/// `FOLD_MARGIN_RAD`). Cost: O(boundary segments + fan).
+pub(super) fn boundary_move_ok(
+    b: &BoundaryView<'_>,
+    uv: &[[f64; 2]],
+    v: usize,
+    p: [f64; 2],
+) -> bool {
+    let pos = |i: u32| if i as usize == v { p } else { uv[i as usize] };
+    let Some(own) = b.vertex_segs.get(v) else {
+        return false;
+    };
+    for &si in own {
+        let Some(&(a, bb, _)) = b.segs.get(si as usize) else {
+            return false;
+        };
+        let (pa, pb) = (pos(a), pos(bb));
+        let (lo, hi) = (
+            [pa[0].min(pb[0]), pa[1].min(pb[1])],
+            [pa[0].max(pb[0]), pa[1].max(pb[1])],
+        );
+        for &(c, d, _) in b.segs {
+            if c == a || c == bb || d == a || d == bb {
+                continue;
+            }
+            let (pc, pd) = (pos(c), pos(d));
+            if pc[0].max(pd[0]) < lo[0]
+                || pc[0].min(pd[0]) > hi[0]
+                || pc[1].max(pd[1]) < lo[1]
+                || pc[1].min(pd[1]) > hi[1]
+            {
+                continue;
+            }
+            if segments_intersect(pa, pb, pc, pd) {
+                return false;
+            }
+        }
+    }
+    // Angle sums at the boundary vertices whose angles change: `v` and its fan's corners.
+    let mut check = vec![v as u32];
+    for (f, _) in b.inc.of(v) {
+        if (b.solid)(f) {
+            for &w in &b.triangles[f] {
+                if b.on_boundary[w as usize] && !check.contains(&w) {
+                    check.push(w);
+                }
+            }
+        }
+    }
+    let limit = std::f64::consts::TAU - FOLD_MARGIN_RAD;
+    for &w in &check {
+        let mut sum = 0.0;
+        for (f, c) in b.inc.of(w as usize) {
+            if !(b.solid)(f) {
+                continue;
+            }
+            let t = b.triangles[f];
+            let (pw, pa, pb) = (pos(t[c]), pos(t[(c + 1) % 3]), pos(t[(c + 2) % 3]));
+            let (e1, e2) = (sub2(pa, pw), sub2(pb, pw));
+            sum += cross2(e1, e2).atan2(e1[0] * e2[0] + e1[1] * e2[1]).abs();
+        }
+        if !exceeds(limit, sum) {
+            return false;
+        }
+    }
+    true
+}
+
 mod global;
 #[cfg(test)]
-mod tests;
+pub(super) mod tests;

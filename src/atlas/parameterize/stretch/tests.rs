@@ -57,7 +57,7 @@ fn oracle_stretch(cm: &ChartMesh, zero: &[bool], uv: &[[f64; 2]]) -> Option<(f64
     Some(((l2 / sum3).sqrt(), linf))
 }
 
-fn signed2(uv: &[[f64; 2]], t: [u32; 3]) -> f64 {
+pub(crate) fn signed2(uv: &[[f64; 2]], t: [u32; 3]) -> f64 {
     let q = t.map(|i| uv[i as usize]);
     (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1])
 }
@@ -67,14 +67,14 @@ fn signed2(uv: &[[f64; 2]], t: [u32; 3]) -> f64 {
 /// midpoint of a boundary edge), and its UV: the xy projection (valid for a height field),
 /// randomly perturbed where that stays valid.
 #[derive(Debug, Clone)]
-struct Case {
-    chart: ChartMesh,
-    zero: Vec<bool>,
-    uv: Vec<[f64; 2]>,
+pub(crate) struct Case {
+    pub(crate) chart: ChartMesh,
+    pub(crate) zero: Vec<bool>,
+    pub(crate) uv: Vec<[f64; 2]>,
 }
 
 #[allow(clippy::too_many_arguments)] // one per random ingredient of a case
-fn case(
+pub(crate) fn case(
     n: usize,
     m: usize,
     heights: &[f64],
@@ -154,7 +154,7 @@ fn case(
     Case { chart, zero, uv }
 }
 
-fn arb_case() -> impl Strategy<Value = Case> {
+pub(crate) fn arb_case() -> impl Strategy<Value = Case> {
     (2usize..7, 2usize..7)
         .prop_flat_map(|(n, m)| {
             let verts = (n + 1) * (m + 1);
@@ -251,7 +251,7 @@ proptest! {
 
 /// A cylinder section (developable: a bent strip of planar quads) with `n × m` quads, and
 /// its exact unrolling.
-fn bent_plane(n: usize, m: usize) -> (ChartMesh, Vec<[f64; 2]>) {
+pub(crate) fn bent_plane(n: usize, m: usize) -> (ChartMesh, Vec<[f64; 2]>) {
     let radius = 2.0;
     let angle = 2.0; // radians of arc
     let chart = grid(n, m, |x, y| {
