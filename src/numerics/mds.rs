@@ -243,8 +243,8 @@ mod tests {
                 mds.embed(&d, 2)
             })
             .collect();
-        for i in 0..q {
-            assert!(sq(&y[i], &mds.landmark_coords[i]) < 1e-16 * l[0]);
+        for (yi, ci) in y.iter().zip(&mds.landmark_coords) {
+            assert!(sq(yi, ci) < 1e-16 * l[0]);
         }
         for i in 0..pts.len() {
             for j in 0..pts.len() {

@@ -171,7 +171,8 @@ pub fn farthest_point_landmarks_in(
         landmarks.push(next);
         dists.push(d);
         next = argmax(&nearest);
-        if !(nearest[next as usize] > 0.0) {
+        // NaN-safe: stop unless the farthest vertex is strictly away from every landmark.
+        if nearest[next as usize].partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             break;
         }
     }

@@ -305,7 +305,7 @@ impl Embedding {
             if area3 == 0.0 {
                 continue;
             }
-            if !(area2 > 0.0) {
+            if area2.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
                 return f64::INFINITY;
             }
             let p = t.map(uv);
@@ -324,7 +324,7 @@ impl Embedding {
             sum2 += area2;
             sum_l2 += area3 * l2sq;
         }
-        if !(sum3 > 0.0) {
+        if sum3.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return 1.0;
         }
         (sum_l2 * sum2 / (sum3 * sum3)).sqrt()
@@ -363,7 +363,11 @@ impl Embedding {
         let spacing = REPRESENTATIVE_SPACING_EDGES * graph.mean_edge_length_m();
         let mut reps: Vec<Vec<f64>> = Vec::new();
         for &c in &candidates {
-            if reps.iter().any(|d| !(d[c as usize] >= spacing)) {
+            // Too close to a kept one (or unreachable: NaN-safe).
+            if reps.iter().any(|d| {
+                d[c as usize].partial_cmp(&spacing) == Some(std::cmp::Ordering::Less)
+                    || d[c as usize].is_nan()
+            }) {
                 continue;
             }
             reps.push(graph.dijkstra(&[c]));
