@@ -7,6 +7,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::atlas::parameterize::{Parameterization, ParameterizeMethod, StretchOptimization};
+use crate::atlas::segment::SegmentMethod;
 use crate::atlas::{AtlasError, AtlasOptions, TexelDensity};
 use crate::gltf_io::{OutputFormat, UvTarget};
 
@@ -67,6 +68,18 @@ pub enum ParameterizationJson {
     /// ASP (Degener et al. 2003): the LSCM maps relaxed for the angle/area energy with θ =
     /// `asp_theta`.
     Asp,
+}
+
+/// Which segmentation cuts the mesh into charts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SegmentationJson {
+    /// Feature curves and chart growing (Lévy et al. 2002 §3; the default).
+    #[default]
+    Features,
+    /// Stretch-driven spectral segmentation (Iso-charts, Zhou et al. 2004 §4–5), bounded by
+    /// `segmentation_max_stretch`.
+    Stretch,
 }
 
 /// Where the atlas UVs go.
@@ -142,6 +155,14 @@ pub struct OptionsJson {
         skip_serializing_if = "Option::is_none"
     )]
     pub merge_max_chart_fraction: Option<Option<f64>>,
+    /// Segmentation method, default `features`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub segmentation: Option<SegmentationJson>,
+    /// The stretch segmentation's bound: a chart is split again while its flattening's L2
+    /// stretch is above it (and the parameterize stage's `max_stretch` is bounded by it), >= 1.
+    /// Default 1.03. Ignored by `features`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub segmentation_max_stretch: Option<f64>,
     /// Fraction of edges kept as feature candidates, (0, 1], default 0.05.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub feature_fraction: Option<f64>,
@@ -238,6 +259,13 @@ impl OptionsJson {
         if let Some(f) = self.merge_max_chart_fraction {
             atlas.parameterize.merge_max_chart_fraction = f;
         }
+        atlas.segment.method = match self.segmentation.unwrap_or_default() {
+            SegmentationJson::Features => SegmentMethod::Lscm2002,
+            SegmentationJson::Stretch => SegmentMethod::Stretch,
+        };
+        if let Some(b) = self.segmentation_max_stretch {
+            atlas.segment.stretch.max_stretch = b;
+        }
         if let Some(f) = self.feature_fraction {
             atlas.segment.lscm.feature_fraction = f;
         }
@@ -312,6 +340,11 @@ impl OptionsJson {
             max_area_ratio: a.parameterize.max_area_ratio,
             merge_passes: Some(a.parameterize.merge_passes),
             merge_max_chart_fraction: Some(a.parameterize.merge_max_chart_fraction),
+            segmentation: Some(match a.segment.method {
+                SegmentMethod::Lscm2002 => SegmentationJson::Features,
+                SegmentMethod::Stretch => SegmentationJson::Stretch,
+            }),
+            segmentation_max_stretch: Some(a.segment.stretch.max_stretch),
             feature_fraction: Some(a.segment.lscm.feature_fraction),
             border_band_fraction: Some(a.segment.border_band_fraction),
             // Rounded to 1e-9° so that 60 reads back as 60, not 59.99999999999999.
@@ -367,6 +400,7 @@ mod tests {
         let text = r#"{"resolution":[2048,512],"padding_texels":4,"texels_per_unit":300.5,
             "rotations":4,"max_charts":12,"max_stretch":1.2,"max_area_ratio":3.0,"merge_passes":2,
             "merge_max_chart_fraction":0.25,"feature_fraction":0.1,"border_band_fraction":0.2,
+            "segmentation":"stretch","segmentation_max_stretch":1.05,
             "hard_edge_angle_deg":45.5,"solver":"hierarchical","stretch_optimization":"linf_l2",
             "stretch_passes":7,"parameterization":"asp","asp_theta":0.75,"uv_set":2,
             "output_format":"gltf"}"#;
@@ -386,6 +420,8 @@ mod tests {
         assert_eq!(s.atlas.parameterize.merge_max_chart_fraction, Some(0.25));
         assert_eq!(s.atlas.segment.lscm.feature_fraction, 0.1);
         assert_eq!(s.atlas.segment.border_band_fraction, Some(0.2));
+        assert_eq!(s.atlas.segment.method, SegmentMethod::Stretch);
+        assert_eq!(s.atlas.segment.stretch.max_stretch, 1.05);
         assert_eq!(
             s.atlas.segment.lscm.hard_edge_angle_rad,
             Some(45.5f64.to_radians())

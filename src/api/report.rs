@@ -113,6 +113,10 @@ pub struct PipelineJson {
     /// Charts made only of degenerate faces (zero area or a repeated vertex): not packed, their
     /// corners sit on a coincident vertex of a packed chart (zero UV area).
     pub degenerate_charts: usize,
+    /// The segmentation that ran: `features` (Lévy et al. 2002) or `stretch` (Iso-charts).
+    pub segmentation: &'static str,
+    /// Charts split by the stretch segmentation's spectral clustering (0 for `features`).
+    pub spectral_splits: usize,
     /// The stretch optimisation that ran on the charts' maps: `global` (the global L2 descent),
     /// `linf_l2` (the global descent, then Sander et al. 2001's vertex passes) or `none`.
     pub stretch_optimization: &'static str,
@@ -220,6 +224,8 @@ impl ReportJson {
                 texels_per_unit: s.texels_per_unit,
                 pack_trials: s.pack_trials,
                 degenerate_charts: s.degenerate_charts,
+                segmentation: s.segmentation.name(),
+                spectral_splits: s.spectral_splits,
                 stretch_optimization: s.stretch_optimization.name(),
                 charts_stretch_optimized: s.stretch.charts_optimized,
                 stretch_vertex_moves: s.stretch.moves,

@@ -57,7 +57,7 @@ use degenerate::place_degenerate;
 use pack_input::{pack_charts_of, pack_inputs, PackInputs};
 use packing_cuts::cut_for_packing;
 use parameterize::{parameterize_charts, ChartDefect};
-use segment::segment_charts;
+use segment::{segment_charts_with, SegmentMethod};
 use uv_guard::{guard_uvs, split_off_faces};
 
 /// Counters of one [`generate`] run.
@@ -86,6 +86,10 @@ pub struct PipelineStats {
     /// Charts made only of degenerate faces (zero area or a repeated vertex): not packed, their
     /// corners take the UV of a coincident vertex of a packed chart (see [`generate`]).
     pub degenerate_charts: usize,
+    /// The segmentation method that ran.
+    pub segmentation: SegmentMethod,
+    /// Charts split by the stretch segmentation's spectral clustering.
+    pub spectral_splits: usize,
     /// The stretch optimisation that ran on the final maps (`parameterize::stretch`).
     pub stretch_optimization: parameterize::StretchOptimization,
     /// What it did: charts optimised and skipped, vertex moves kept.
@@ -146,6 +150,19 @@ pub fn generate(
     progress: &mut dyn Progress,
 ) -> Result<Atlas, AtlasError> {
     options.check()?;
+    // The stretch-driven segmentation's bound also bounds the parameterize stage's, so that its
+    // merge-back does not undo the splits.
+    let bounded;
+    let options = if options.segment.method == SegmentMethod::Stretch {
+        let mut o = *options;
+        let bound = o.segment.stretch.max_stretch;
+        o.parameterize.max_stretch =
+            Some(o.parameterize.max_stretch.map_or(bound, |m| m.min(bound)));
+        bounded = o;
+        &bounded
+    } else {
+        options
+    };
     let check = |flow: ControlFlow<()>, stage: Stage| match flow {
         ControlFlow::Continue(()) => Ok(()),
         ControlFlow::Break(()) => Err(AtlasError::Cancelled { stage }),
@@ -153,9 +170,12 @@ pub fn generate(
 
     // 1. Segment.
     progress.stage_started(Stage::Segment);
-    let seg = segment_charts(
+    let flatten = options.parameterize.flatten;
+    let measure = move |faces: &[crate::mesh::FaceId]| flattened_l2_stretch(mesh, faces, &flatten);
+    let seg = segment_charts_with(
         mesh,
         &options.segment,
+        Some(&measure),
         &mut StageProgress::new(Stage::Segment, progress),
     )?;
     progress.stage_finished(Stage::Segment);
@@ -193,6 +213,8 @@ pub fn generate(
         parameterize_splits: parameterized.splits,
         parameterize_merges: parameterized.merges,
         packing_cuts,
+        segmentation: options.segment.method,
+        spectral_splits: seg.stats.spectral_splits,
         stretch_optimization: options.parameterize.stretch_optimization,
         stretch: parameterized.stretch,
         parameterization: options.parameterize.parameterization,
@@ -369,4 +391,29 @@ fn pack_and_write(
         degenerate_charts: charts.len() - packed.len(),
         packing,
     })
+}
+
+/// The Sander L2 stretch of the chart `faces`' flattening by the parameterize stage's solver (the
+/// chart scaled to UV area = model area), `f64::INFINITY` when the map flips a face, `None` when
+/// the chart cannot be flattened as it is (not a disk, a degenerate face: the parameterize stage
+/// deals with it). The measure the stretch-driven segmentation splits by.
+fn flattened_l2_stretch(
+    mesh: &TriangleMesh,
+    faces: &[crate::mesh::FaceId],
+    flatten: &parameterize::FlattenOptions,
+) -> Option<f64> {
+    let (cm, _) = parameterize::chart_mesh(mesh, faces);
+    let map =
+        parameterize::flatten_chart(&cm, flatten, &mut StageProgress::ignored(Stage::Segment))
+            .ok()?;
+    if !map.is_valid() {
+        return Some(f64::INFINITY);
+    }
+    let zero_area = vec![false; cm.triangles.len()];
+    let chart = parameterize::StretchChart {
+        positions_m: &cm.positions_m,
+        triangles: &cm.triangles,
+        zero_area: &zero_area,
+    };
+    Some(parameterize::stretch::chart_stretch(&chart, &map.uv).map_or(f64::INFINITY, |(l2, _)| l2))
 }

@@ -11,8 +11,8 @@ use std::process::ExitCode;
 use anyhow::{bail, Context as _};
 use indicatif::{ProgressBar, ProgressStyle};
 use texatlas::api::{
-    OptionsJson, OutputFormatJson, ParameterizationJson, ResolutionJson, SolverJson,
-    StretchOptimizationJson, UvSetJson, UvSetName,
+    OptionsJson, OutputFormatJson, ParameterizationJson, ResolutionJson, SegmentationJson,
+    SolverJson, StretchOptimizationJson, UvSetJson, UvSetName,
 };
 use texatlas::atlas::{Progress, Stage};
 use texatlas::preview::{preview_size_px, render_preview};
@@ -77,6 +77,14 @@ pub struct OptionFlags {
     /// `none` (unions of at most 4,096 faces are always tried). Default 0.1.
     #[arg(long, value_parser = parse_fraction)]
     pub merge_max_chart_fraction: Option<OrNone>,
+    /// Segmentation: features (feature curves and chart growing, Lévy et al. 2002) or stretch
+    /// (stretch-driven spectral segmentation, Iso-charts 2004). Default features.
+    #[arg(long, value_parser = parse_segmentation)]
+    pub segmentation: Option<SegmentationJson>,
+    /// The stretch segmentation's bound: charts are split while their flattening's L2 stretch
+    /// is above it (>= 1); it also bounds --max-stretch. Default 1.03.
+    #[arg(long)]
+    pub segmentation_max_stretch: Option<f64>,
     /// Fraction of edges kept as feature candidates, (0, 1]. Default 0.05.
     #[arg(long)]
     pub feature_fraction: Option<f64>,
@@ -131,6 +139,8 @@ impl OptionFlags {
             max_area_ratio: self.max_area_ratio,
             merge_passes: self.merge_passes,
             merge_max_chart_fraction: self.merge_max_chart_fraction.map(|b| b.0),
+            segmentation: self.segmentation,
+            segmentation_max_stretch: self.segmentation_max_stretch,
             feature_fraction: self.feature_fraction,
             border_band_fraction: self.border_band_fraction.map(|b| b.0),
             hard_edge_angle_deg: self.hard_edge_angle_deg.map(|b| b.0),
@@ -190,6 +200,16 @@ fn parse_solver(s: &str) -> Result<SolverJson, String> {
         "hierarchical" => Ok(SolverJson::Hierarchical),
         _ => Err(format!(
             "`{s}` is not a solver; use auto, direct or hierarchical"
+        )),
+    }
+}
+
+fn parse_segmentation(s: &str) -> Result<SegmentationJson, String> {
+    match s {
+        "features" => Ok(SegmentationJson::Features),
+        "stretch" => Ok(SegmentationJson::Stretch),
+        _ => Err(format!(
+            "`{s}` is not a segmentation; use features or stretch"
         )),
     }
 }

@@ -32,7 +32,7 @@ use crate::mesh::vector::dot;
 use crate::mesh::{FaceId, TriangleMesh};
 use crate::numerics::{CutSide, FlowGraph};
 
-use super::{disk_check, Features};
+use super::{disk_check, Features, NotADisk};
 
 /// Capacity factor of a detected feature or hard edge: a border lying on a feature curve costs
 /// a tenth of a smooth border of the same length and sharpness, so the cut keeps the curves
@@ -41,6 +41,20 @@ pub const FEATURE_EDGE_WEIGHT: f64 = 0.1;
 
 /// Capacities are quantised to integers in `[1, CAPACITY_SCALE + 1]` before the max-flow.
 const CAPACITY_SCALE: f64 = (1u64 << 20) as f64;
+
+/// The distortion term of the capacity (Iso-charts §5.2, eq. 2, 4–5), for a pair of charts cut
+/// from one chart by the stretch-driven segmentation: `c = α·c_ang + (1 − α)·c_distort`, with
+/// `c_distort(fi, fj) = d(fi, fj) / avg(d)`, `d(fi, fj) = δ(fi) + δ(fj)` and
+/// `δ(f) = |GDD_A(f) − GDD_B(f)|`, the difference of the face's geodesic distance distortion
+/// under the two charts' embeddings (`spectral.rs`); both terms are weighted by edge length as
+/// the angular one is here. The average runs over the band's edges.
+#[derive(Debug, Clone, Copy)]
+pub struct Distortion<'a> {
+    /// `δ(f)` per face of the mesh (read for the faces of the pair only).
+    pub per_face: &'a [f64],
+    /// The weight α of the angular term, in `[0, 1]`; the paper's figures use 0.5.
+    pub alpha: f64,
+}
 
 /// What [`optimize_borders`] did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -60,6 +74,21 @@ pub fn optimize_borders(
     charts: &mut [Vec<FaceId>],
     features: Option<&Features>,
     band_fraction: f64,
+) -> BorderStats {
+    optimize_borders_with(mesh, charts, features, band_fraction, None, true)
+}
+
+/// [`optimize_borders`] with the distortion term `distortion` in the capacity, and, with
+/// `keep_disks` false, for charts that need only be connected (the spectral segmentation's
+/// intermediate parts): a border then moves when both charts stay connected. `charts` need not
+/// cover the mesh; faces outside them are never touched.
+pub fn optimize_borders_with(
+    mesh: &TriangleMesh,
+    charts: &mut [Vec<FaceId>],
+    features: Option<&Features>,
+    band_fraction: f64,
+    distortion: Option<Distortion<'_>>,
+    keep_disks: bool,
 ) -> BorderStats {
     let nf = mesh.num_faces();
     let mut stats = BorderStats::default();
@@ -124,7 +153,7 @@ pub fn optimize_borders(
                 face_chart[mesh.face(h).index()],
                 face_chart[mesh.face(o).index()],
             );
-            if a < b {
+            if a < b && b != u32::MAX {
                 pairs.push((a, b));
             }
         }
@@ -204,7 +233,8 @@ pub fn optimize_borders(
 
         // Capacities of the band's edges (to band faces and to the cores), quantised.
         let mut edges: Vec<(u32, Option<u32>, usize, f64)> = Vec::new(); // (node, other node | core side, side of core, cap)
-        let mut max_cap = 0.0f64;
+                                                                         // With the distortion term: (length, δ(f) + δ(g)) per entry of `edges`.
+        let mut spread: Vec<(f64, f64)> = Vec::new();
         for (i, &f) in band.iter().enumerate() {
             for h in mesh.face_halfedges(f) {
                 let Some(o) = mesh.opposite(h) else { continue };
@@ -221,9 +251,22 @@ pub fn optimize_borders(
                 } else {
                     continue;
                 }
-                max_cap = max_cap.max(c);
+                if let Some(d) = distortion {
+                    spread.push((
+                        mesh.edge_length_m(h),
+                        d.per_face[f.index()] + d.per_face[g.index()],
+                    ));
+                }
             }
         }
+        if let Some(d) = distortion {
+            let mean = spread.iter().map(|s| s.1).sum::<f64>() / spread.len().max(1) as f64;
+            for (e, &(length_m, sum)) in edges.iter_mut().zip(&spread) {
+                let c_distort = if mean > 0.0 { sum / mean } else { 0.0 };
+                e.3 = d.alpha * e.3 + (1.0 - d.alpha) * c_distort * length_m;
+            }
+        }
+        let max_cap = edges.iter().fold(0.0f64, |m, e| m.max(e.3));
         let quantise = |c: f64| -> i64 {
             if max_cap > 0.0 && c.is_finite() {
                 1 + (c / max_cap * CAPACITY_SCALE).round() as i64
@@ -306,11 +349,13 @@ pub fn optimize_borders(
                     face_chart[f.index()]
                 }
             };
-            if !new_a.is_empty()
-                && !new_b.is_empty()
-                && disk_check(mesh, &new_a, &|f| label(f) == a).is_ok()
-                && disk_check(mesh, &new_b, &|f| label(f) == b).is_ok()
+            let fits = |faces: &[FaceId], c: u32| match disk_check(mesh, faces, &|f| label(f) == c)
             {
+                Ok(_) => true,
+                Err(NotADisk::Disconnected { .. } | NotADisk::Empty) => false,
+                Err(_) => !keep_disks,
+            };
+            if !new_a.is_empty() && !new_b.is_empty() && fits(&new_a, a) && fits(&new_b, b) {
                 for f in &new_a {
                     face_chart[f.index()] = a;
                 }

@@ -12,8 +12,9 @@
 //! assert it on every chart before returning, and the tests call it on every chart of every
 //! fixture. Every face is in exactly one chart; charts never span connected components.
 //!
-//! How the guarantee is kept: the method (today [`SegmentMethod::Lscm2002`]: `features.rs` then
-//! `grow.rs`) proposes a partition; each proposed chart is split into its glued components, and
+//! How the guarantee is kept: the method ([`SegmentMethod::Lscm2002`]: `features.rs` then
+//! `grow.rs`; or [`SegmentMethod::Stretch`]: `spectral.rs` on `geodesic.rs` and
+//! `numerics::mds`) proposes a partition; each proposed chart is split into its glued components, and
 //! each component that is not a disk (a handle, an annulus, a closed part, a pinch) is re-grown as
 //! two charts from the two ends of a diameter of its face graph (breadth-first, simultaneously),
 //! and the parts are checked again. Each split makes one more chart, so there are at most
@@ -30,7 +31,8 @@
 //! reporting never changes the charts.
 //!
 //! Code map: [`options`] (every option, unit, default), [`features`] (§3.1, Algorithm 1),
-//! [`grow`] (§3.2, Algorithm 2), this file (the disk guarantee and the chart-count cap),
+//! [`grow`] (§3.2, Algorithm 2), [`spectral`] and [`geodesic`] (the stretch-driven method of
+//! Iso-charts §4–5), this file (the disk guarantee and the chart-count cap),
 //! [`graph_cut`] (opt-in: borders moved to a minimum cut, Iso-charts §5.2, between the disk
 //! guarantee and the cap; it keeps every chart a disk and the count unchanged). The
 //! next stage, `parameterize`, flattens the charts, splits the invalid ones and merges back
@@ -39,9 +41,11 @@
 //! References: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
 //! Automatic Texture Atlas Generation", SIGGRAPH 2002, §3.
 pub mod features;
+pub mod geodesic;
 pub mod graph_cut;
 pub mod grow;
 pub mod options;
+pub mod spectral;
 
 #[cfg(test)]
 pub(crate) mod tests;
@@ -56,7 +60,8 @@ use crate::mesh::{FaceData, FaceId, HalfedgeId, TriangleMesh, VertexId};
 
 pub use features::{detect_features, Features};
 pub use grow::{distance_to_features, grow_charts, GrownCharts};
-pub use options::{Lscm2002Options, SegmentMethod, SegmentOptions};
+pub use options::{Lscm2002Options, SegmentMethod, SegmentOptions, StretchSegmentOptions};
+pub use spectral::ChartStretchFn;
 
 /// A chart of a [`Segmentation`], numbered by its lowest face id. Displayed as `C3`.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Debug)]
@@ -150,6 +155,10 @@ pub struct SegmentStats {
     pub disk_splits: usize,
     /// Merges made to respect [`SegmentOptions::max_charts`].
     pub cap_merges: usize,
+    /// Charts split by the stretch-driven method's spectral clustering (`spectral.rs`).
+    pub spectral_splits: usize,
+    /// Rounds of the stretch-driven method.
+    pub spectral_rounds: usize,
     /// Pairs of adjacent charts whose border the graph cut moved (`graph_cut.rs`).
     pub borders_moved: usize,
     /// `maxdist`, the largest distance to features, model units.
@@ -193,6 +202,18 @@ pub fn segment_charts(
     options: &SegmentOptions,
     progress: &mut StageProgress<'_>,
 ) -> Result<Segmentation, SegmentError> {
+    segment_charts_with(mesh, options, None, progress)
+}
+
+/// [`segment_charts`] with the measure of a chart's L2 stretch that [`SegmentMethod::Stretch`]
+/// splits by (the pipeline passes its flattening's); `None` uses the method's own estimate from
+/// its embedding (`spectral.rs`). Other methods ignore it.
+pub fn segment_charts_with(
+    mesh: &TriangleMesh,
+    options: &SegmentOptions,
+    stretch: Option<&ChartStretchFn<'_>>,
+    progress: &mut StageProgress<'_>,
+) -> Result<Segmentation, SegmentError> {
     options.check()?;
     // Progress units: the faces, once per phase.
     let nf = mesh.num_faces();
@@ -216,6 +237,26 @@ pub fn segment_charts(
             stats.max_distance_m = grown.max_distance_m;
             features = Some(feats);
             grown.face_chart
+        }
+        SegmentMethod::Stretch => {
+            let (charts, spectral) = spectral::spectral_charts(
+                mesh,
+                &options.stretch,
+                options.border_band_fraction,
+                stretch,
+                &mut progress.part(0, 2 * nf, total),
+            )?;
+            stats.spectral_splits = spectral.splits;
+            stats.spectral_rounds = spectral.rounds;
+            stats.grown_charts = charts.len();
+            features = None;
+            let mut face_chart = vec![0u32; nf];
+            for (i, c) in charts.iter().enumerate() {
+                for f in c {
+                    face_chart[f.index()] = i as u32;
+                }
+            }
+            face_chart
         }
     };
     let mut work: Vec<Vec<FaceId>> = Vec::new();
@@ -244,7 +285,11 @@ pub fn segment_charts(
             checkpoint(disks.advance(faces_done, nf))?;
         }
     }
-    if let Some(band_fraction) = options.border_band_fraction {
+    // The stretch-driven method cuts the border of each split as it makes it (with its
+    // distortion term), so only the feature method moves borders here.
+    if let (Some(band_fraction), SegmentMethod::Lscm2002) =
+        (options.border_band_fraction, options.method)
+    {
         let moved =
             graph_cut::optimize_borders(mesh, &mut charts, features.as_ref(), band_fraction);
         stats.borders_moved = moved.moved;
@@ -346,7 +391,7 @@ pub(super) fn disk_check(
 
 /// [`disk_check`] for faces already known to be connected through glued edges (non-empty):
 /// the fan, Euler characteristic and boundary-loop tests only.
-fn disk_check_connected(
+pub(super) fn disk_check_connected(
     mesh: &TriangleMesh,
     faces: &[FaceId],
     inside: &dyn Fn(FaceId) -> bool,

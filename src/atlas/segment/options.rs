@@ -1,9 +1,9 @@
 //! Options of the segmentation stage ([`super::segment_charts`]).
 //!
-//! Purpose: every knob of the LSCM-paper segmentation (Lévy et al. 2002, §3.1–§3.2) with its unit,
-//! default and meaning, behind a [`SegmentMethod`] enum so that a second method (Iso-charts
-//! spectral segmentation) plugs in as a new variant with its own option block, without reshaping
-//! [`SegmentOptions`] or the `segment_charts` contract.
+//! Purpose: every knob of the segmentation with its unit, default and meaning, behind a
+//! [`SegmentMethod`] enum: the LSCM-paper method (Lévy et al. 2002, §3.1–§3.2,
+//! [`Lscm2002Options`]) and the stretch-driven spectral method of Iso-charts (Zhou et al. 2004,
+//! §4–5, [`StretchSegmentOptions`]), each with its own option block.
 //!
 //! Invariants: [`SegmentOptions::check`] rejects values that make no sense (a fraction outside
 //! `(0, 1]`, a zero string length); no option uses 0 to mean "unlimited" (`Option` does).
@@ -22,6 +22,46 @@ pub enum SegmentMethod {
     /// the disk guarantee. Tuned by [`SegmentOptions::lscm`].
     #[default]
     Lscm2002,
+    /// Stretch-driven spectral segmentation of Iso-charts (Zhou et al. 2004, §4–5,
+    /// `spectral.rs`): landmark geodesics, landmark MDS, spectral clustering, each chart split
+    /// again while its flattening's L2 stretch is above [`StretchSegmentOptions::max_stretch`].
+    /// Tuned by [`SegmentOptions::stretch`].
+    Stretch,
+}
+
+impl SegmentMethod {
+    /// The wire name (`features`, `stretch`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Lscm2002 => "features",
+            Self::Stretch => "stretch",
+        }
+    }
+}
+
+/// Options of the stretch-driven method ([`SegmentMethod::Stretch`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StretchSegmentOptions {
+    /// A chart is split again while the Sander L2 stretch of its flattening (the chart scaled to
+    /// UV area = model area) is above this; the parameterize stage's merge-back then keeps it
+    /// too (the pipeline bounds its `max_stretch` by it). Ratio `>= 1`. Default `1.03`.
+    pub max_stretch: f64,
+    /// Landmarks of the landmark MDS per chart (Iso-charts §6 uses 100, UVAtlas 25). At least
+    /// 3. Default `25`.
+    pub landmarks: usize,
+    /// A chart with fewer faces than this is not split for stretch (it is still made a disk).
+    /// At least 2. Default `32`.
+    pub min_split_faces: usize,
+}
+
+impl Default for StretchSegmentOptions {
+    fn default() -> Self {
+        Self {
+            max_stretch: 1.03,
+            landmarks: 25,
+            min_split_faces: 32,
+        }
+    }
 }
 
 /// Options of the LSCM-paper method ([`SegmentMethod::Lscm2002`]).
@@ -73,6 +113,8 @@ pub struct SegmentOptions {
     pub method: SegmentMethod,
     /// Tuning of [`SegmentMethod::Lscm2002`] (ignored by other methods).
     pub lscm: Lscm2002Options,
+    /// Tuning of [`SegmentMethod::Stretch`] (ignored by other methods).
+    pub stretch: StretchSegmentOptions,
     /// Upper bound on the number of charts, or `None` for no bound (default). Best effort: once
     /// the charts are grown, adjacent charts are merged, smallest first, while the merged chart is
     /// still a disk and there are more charts than the bound. The disk guarantee always wins, so
@@ -86,7 +128,9 @@ pub struct SegmentOptions {
     /// `seam_edge_ratio` 11.8 → 10.6, 2CylinderEngine 90 → 69) and lowers L∞ on the scans
     /// (bunny 3.95 → 2.81), but raises the chart count after validation on armadillo, spot and
     /// DepthOfField and lowers bunny's packing (0.66 → 0.63), so it is opt-in until the
-    /// stretch-driven segmentation gives it the paper's distortion term.
+    /// stretch-driven segmentation gives it the paper's distortion term. With
+    /// [`SegmentMethod::Stretch`] the cut runs on the border of every split as it is made, with
+    /// the paper's distortion term on binary splits (`spectral.rs`), instead of once at the end.
     pub border_band_fraction: Option<f64>,
 }
 
@@ -133,6 +177,28 @@ impl SegmentOptions {
                     format!("{b} is not in (0, 1); use e.g. 0.3, or None to keep grown borders"),
                 );
             }
+        }
+        let st = &self.stretch;
+        if !(st.max_stretch >= 1.0 && st.max_stretch.is_finite()) {
+            return bad(
+                "stretch.max_stretch",
+                format!(
+                    "{} is not a finite ratio >= 1; use e.g. 1.03",
+                    st.max_stretch
+                ),
+            );
+        }
+        if st.landmarks < 3 {
+            return bad(
+                "stretch.landmarks",
+                format!("{} landmarks; use at least 3 (default 25)", st.landmarks),
+            );
+        }
+        if st.min_split_faces < 2 {
+            return bad(
+                "stretch.min_split_faces",
+                format!("{} faces; use at least 2 (default 32)", st.min_split_faces),
+            );
         }
         if self.max_charts == Some(0) {
             return bad(
