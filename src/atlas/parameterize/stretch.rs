@@ -862,7 +862,7 @@ fn parabolic_search(value: &impl Fn(f64) -> f64, hi: f64, phi0: f64, slope: f64)
     let mut t1 = 0.25 * hi;
     let mut f1 = value(t1);
     let mut backtracks = 0;
-    while !(f1 < phi0) && backtracks < PARABOLA_BACKTRACKS {
+    while !exceeds(phi0, f1) && backtracks < PARABOLA_BACKTRACKS {
         t1 *= 0.25;
         f1 = value(t1);
         backtracks += 1;

@@ -22,7 +22,7 @@
 //! step is accepted. Deterministic and sequential.
 //!
 //! Units: UVs in model units; `E` in (model units)⁴ (only its ratios are used).
-use super::{crossing_among, sub2, FrameFace, State, FOLD_MARGIN_RAD};
+use super::{crossing_among, exceeds, sub2, FrameFace, State, FOLD_MARGIN_RAD};
 use crate::numerics::{CsrMatrix, SparseCholesky, Triplet};
 
 /// Steps of the global descent, at most. Trade-off: each costs one gradient, two triangular
@@ -239,7 +239,7 @@ fn preconditioner(st: &State<'_>, n: usize) -> Option<SparseCholesky> {
             let cross = (ea[0] * eb[1] - ea[1] * eb[0]).abs();
             let cot = (ea[0] * eb[0] + ea[1] * eb[1]) / cross;
             let w = 0.5 * cot.clamp(0.0, COT_MAX);
-            if !(w > 0.0) {
+            if !exceeds(w, 0.0) {
                 continue;
             }
             let (i, j) = (t[a], t[b]);
@@ -300,7 +300,7 @@ fn boundary_ok(st: &State<'_>, uv: &[[f64; 2]]) -> bool {
                 .atan2(e1[0] * e2[0] + e1[1] * e2[1])
                 .abs();
         }
-        if !(sum < limit) {
+        if !exceeds(limit, sum) {
             return false;
         }
     }
@@ -338,7 +338,7 @@ pub(super) fn descend(st: &State<'_>, uv: &mut [[f64; 2]], linf_cap: f64) -> usi
             break;
         }
         let hi = FLIP_MARGIN * flip_free_step(st, uv, &d);
-        if !(hi > 0.0) {
+        if !exceeds(hi, 0.0) {
             break;
         }
         let mut t = match t_prev {
