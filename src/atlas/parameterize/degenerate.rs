@@ -130,12 +130,44 @@ pub(super) fn extend_map(
         uv[local_of(v) as usize] = Some(sub.uv[s]);
     }
     let dropped_tris: Vec<usize> = (0..faces.len()).filter(|&k| dropped[k]).collect();
+    place_on_zero_area_faces(&cm, &dropped_tris, &mut uv);
+    let uv: Vec<[f64; 2]> = uv.into_iter().map(Option::unwrap_or_default).collect();
+    let kept_index: Vec<usize> = (0..faces.len()).filter(|&k| !dropped[k]).collect();
+    let flipped_faces = sub
+        .flipped_faces
+        .iter()
+        .map(|&t| kept_index[t as usize] as u32)
+        .collect();
+    let pins = sub.pins.map(|p| local_of(sub_global[p as usize]));
+    (
+        ChartMap {
+            uv,
+            conformal_energy: sub.conformal_energy,
+            flipped_faces,
+            method_used: sub.method_used,
+            iterations: sub.iterations,
+            pins,
+            hlscm: sub.hlscm,
+        },
+        global,
+    )
+}
+
+/// Gives a UV to every vertex of `uv` still `None` from the zero-area faces `dropped_tris` of
+/// `cm` (extend_map's rule): from a face with two placed corners `a`, `b`, the point of their UV
+/// segment at the vertex's 3-D position projected on `ab`; when no face has two placed corners,
+/// the UV of a placed corner. Vertices no zero-area face reaches stay `None`.
+pub(super) fn place_on_zero_area_faces(
+    cm: &super::ChartMesh,
+    dropped_tris: &[usize],
+    uv: &mut [Option<[f64; 2]>],
+) {
     // Each round maps at least one more vertex (or stops), so at most V rounds; the chart is
     // connected, so every vertex is reached. Interpolation is preferred; one copy is made only
     // when no interpolation is possible.
     loop {
         let mut progress = false;
-        for &k in &dropped_tris {
+        for &k in dropped_tris {
             let t = cm.triangles[k];
             let known: Vec<u32> = t
                 .iter()
@@ -167,7 +199,7 @@ pub(super) fn extend_map(
         if progress {
             continue;
         }
-        'copy: for &k in &dropped_tris {
+        'copy: for &k in dropped_tris {
             let t = cm.triangles[k];
             if let Some(&a) = t.iter().find(|&&i| uv[i as usize].is_some()) {
                 if let Some(&p) = t.iter().find(|&&i| uv[i as usize].is_none()) {
@@ -181,26 +213,6 @@ pub(super) fn extend_map(
             break;
         }
     }
-    let uv: Vec<[f64; 2]> = uv.into_iter().map(Option::unwrap_or_default).collect();
-    let kept_index: Vec<usize> = (0..faces.len()).filter(|&k| !dropped[k]).collect();
-    let flipped_faces = sub
-        .flipped_faces
-        .iter()
-        .map(|&t| kept_index[t as usize] as u32)
-        .collect();
-    let pins = sub.pins.map(|p| local_of(sub_global[p as usize]));
-    (
-        ChartMap {
-            uv,
-            conformal_energy: sub.conformal_energy,
-            flipped_faces,
-            method_used: sub.method_used,
-            iterations: sub.iterations,
-            pins,
-            hlscm: sub.hlscm,
-        },
-        global,
-    )
 }
 
 /// The map of a chart whose faces all have zero area (or, as a last resort, of a chart the

@@ -47,7 +47,9 @@ use std::sync::Arc;
 use super::asp::{relax_chart_asp_hierarchical, AspStats, MAX_SWEEPS};
 use super::defects::find_defect;
 use super::defects::ChartDefect;
-use super::degenerate::{flatten_around_degenerate, line_map, split_off_degenerate, Attempt};
+use super::degenerate::{
+    flatten_around_degenerate, line_map, place_on_zero_area_faces, split_off_degenerate, Attempt,
+};
 use super::merge::merge_back;
 use super::options::Parameterization;
 use super::schedule::in_parallel_largest_first;
@@ -377,7 +379,20 @@ pub(super) fn optimize_stretch_charts(
             if outcome.moves == 0 && outcome.global_steps == 0 {
                 return (i, None, outcome);
             }
-            let energy = conformal_energy(&cm, &uv);
+            follow_zero_area_faces(&cm, &zero_area, &mut uv);
+            // Over the faces of positive area, as the parameterizer's (zero-area faces have no
+            // conformal energy: their 1/√d_T weight is infinite).
+            let solid = super::ChartMesh {
+                positions_m: cm.positions_m.clone(),
+                triangles: cm
+                    .triangles
+                    .iter()
+                    .zip(&zero_area)
+                    .filter(|(_, &z)| !z)
+                    .map(|(t, _)| *t)
+                    .collect(),
+            };
+            let energy = conformal_energy(&solid, &uv);
             (i, Some((uv, energy)), outcome)
         })
         .collect();
@@ -403,6 +418,28 @@ pub(super) fn optimize_stretch_charts(
         }
     }
     stats
+}
+
+/// Puts back every vertex that only zero-area faces use (the optimiser does not move it, but it
+/// moves their other corners) by `degenerate`'s rule, so that those faces stay degenerate in UV
+/// as they are in 3-D (`super::degenerate`'s module doc).
+fn follow_zero_area_faces(cm: &super::ChartMesh, zero_area: &[bool], uv: &mut [[f64; 2]]) {
+    let zero_tris: Vec<usize> = (0..zero_area.len()).filter(|&k| zero_area[k]).collect();
+    if zero_tris.is_empty() {
+        return;
+    }
+    let mut placed: Vec<Option<[f64; 2]>> = vec![None; uv.len()];
+    for (t, _) in cm.triangles.iter().zip(zero_area).filter(|(_, &z)| !z) {
+        for &v in t {
+            placed[v as usize] = Some(uv[v as usize]);
+        }
+    }
+    place_on_zero_area_faces(cm, &zero_tris, &mut placed);
+    for (p, q) in uv.iter_mut().zip(placed) {
+        if let Some(q) = q {
+            *p = q;
+        }
+    }
 }
 
 /// One chart's ASP result: its index, its new UVs and conformal energy when kept, the outcome.

@@ -197,8 +197,12 @@ fn flip_free_step(st: &State<'_>, uv: &[[f64; 2]], d: &[[f64; 2]]) -> f64 {
 /// negative; `None` when it stays non-negative for every `t > 0`.
 fn smallest_positive_root(c0: f64, c1: f64, c2: f64) -> Option<f64> {
     if c0 <= 0.0 {
-        // Already on the floor: any step that lowers it is not allowed.
-        return (c1 < 0.0 || (c1 == 0.0 && c2 < 0.0)).then_some(0.0);
+        // Already on the floor: any step that lowers it at once is not allowed; one that
+        // raises it first comes back down at −c1/c2 when c2 < 0.
+        if c1 < 0.0 || (c1 == 0.0 && c2 < 0.0) {
+            return Some(0.0);
+        }
+        return (c2 < 0.0).then(|| -c1 / c2);
     }
     if c2.abs() <= 1e-300 {
         return (c1 < 0.0).then(|| -c0 / c1);
@@ -469,5 +473,9 @@ mod tests {
         assert!((r - 1.0).abs() < 1e-12);
         // On the floor, going down: 0.
         assert_eq!(smallest_positive_root(0.0, -1.0, 0.0), Some(0.0));
+        // On the floor, going up then down: t − t² comes back to 0 at 1.
+        assert_eq!(smallest_positive_root(0.0, 1.0, -1.0), Some(1.0));
+        // On the floor, going up for good: t + t².
+        assert_eq!(smallest_positive_root(0.0, 1.0, 1.0), None);
     }
 }
