@@ -314,7 +314,7 @@ fn asp_atlas_is_valid_and_the_same_at_any_thread_count() {
         o
     };
     let lscm = p95(&unoptimized(AtlasOptions::default()));
-    let asp = p95(&unoptimized(options.clone()));
+    let asp = p95(&unoptimized(options));
     assert!(asp < lscm, "area distortion p95: LSCM {lscm} vs ASP {asp}");
     // And the default (LSCM, then the global stretch descent) lowers it too.
     let global = p95(&AtlasOptions::default());
