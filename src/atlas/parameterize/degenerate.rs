@@ -14,8 +14,10 @@
 //! Units: UVs in model units. Pure functions, called in parallel.
 use super::defects::{find_defect, ChartDefect};
 use super::flatten::flatten_chart_with_topology;
+use super::stretch::{descend_for_bound, StretchOptimization};
 use super::{
-    chart_mesh, ChartMap, LocatedMap, ParameterizeError, ParameterizeMethod, ParameterizeOptions,
+    chart_mesh, conformal_energy, ChartMap, LocatedMap, ParameterizeError, ParameterizeMethod,
+    ParameterizeOptions,
 };
 use crate::atlas::progress::{Stage, StageProgress};
 use crate::atlas::segment::{disk_check, enforce_disks, SegmentStats};
@@ -77,7 +79,20 @@ pub(super) fn flatten_around_degenerate(
             &mut StageProgress::ignored(Stage::Parameterize),
         ) {
             Ok((map, topology)) => {
-                let defect = find_defect(&kept, &cm, &topology.boundary_loop, &map, options);
+                let mut map = map;
+                let mut defect = find_defect(&kept, &cm, &topology.boundary_loop, &map, options);
+                // The stretch bound holds for the map the stretch optimisation makes: test that
+                // one (the descended map is kept even when it still fails, so that the split's
+                // parts start from it).
+                if matches!(defect, Some(ChartDefect::Stretch { .. }))
+                    && options.stretch_optimization != StretchOptimization::None
+                {
+                    if let Some(uv) = descend_for_bound(&cm, &map.uv) {
+                        map.conformal_energy = conformal_energy(&cm, &uv);
+                        map.uv = uv;
+                        defect = find_defect(&kept, &cm, &topology.boundary_loop, &map, options);
+                    }
+                }
                 let map = if kept.len() == faces.len() {
                     (map, global)
                 } else {
