@@ -131,7 +131,7 @@ pub struct OptionsJson {
     /// Upper bound on the number of charts after segmentation (best effort); unset: no bound.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_charts: Option<usize>,
-    /// Largest Sander L2 stretch of a chart before validation splits it, ≥ 1. Absent: 1.1;
+    /// Largest Sander L2 stretch of a chart before validation splits it, ≥ 1. Absent: 1.07;
     /// `null`: no stretch bound.
     #[serde(
         default,
@@ -139,6 +139,14 @@ pub struct OptionsJson {
         skip_serializing_if = "Option::is_none"
     )]
     pub max_stretch: Option<Option<f64>>,
+    /// Largest Sander L∞ stretch of a chart before validation splits it, ≥ 1. Absent: 3;
+    /// `null`: no bound.
+    #[serde(
+        default,
+        deserialize_with = "explicit_null",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub max_linf: Option<Option<f64>>,
     /// The LSCM paper's area test (§3.3): largest per-chart ratio between face area ratios
     /// (model / UV), ≥ 1, e.g. 2. Absent: no area test.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -250,6 +258,9 @@ impl OptionsJson {
         if let Some(r) = self.max_stretch {
             atlas.parameterize.max_stretch = r;
         }
+        if let Some(r) = self.max_linf {
+            atlas.parameterize.max_linf = r;
+        }
         if let Some(r) = self.max_area_ratio {
             atlas.parameterize.max_area_ratio = Some(r);
         }
@@ -337,6 +348,7 @@ impl OptionsJson {
             rotations: Some(a.pack.rotations),
             max_charts: a.segment.max_charts,
             max_stretch: Some(a.parameterize.max_stretch),
+            max_linf: Some(a.parameterize.max_linf),
             max_area_ratio: a.parameterize.max_area_ratio,
             merge_passes: Some(a.parameterize.merge_passes),
             merge_max_chart_fraction: Some(a.parameterize.merge_max_chart_fraction),
@@ -398,7 +410,7 @@ mod tests {
     #[test]
     fn every_field_maps_and_round_trips() {
         let text = r#"{"resolution":[2048,512],"padding_texels":4,"texels_per_unit":300.5,
-            "rotations":4,"max_charts":12,"max_stretch":1.2,"max_area_ratio":3.0,"merge_passes":2,
+            "rotations":4,"max_charts":12,"max_stretch":1.2,"max_linf":4.5,"max_area_ratio":3.0,"merge_passes":2,
             "merge_max_chart_fraction":0.25,"feature_fraction":0.1,"border_band_fraction":0.2,
             "segmentation":"stretch","segmentation_max_stretch":1.05,
             "hard_edge_angle_deg":45.5,"solver":"hierarchical","stretch_optimization":"linf_l2",
@@ -416,6 +428,7 @@ mod tests {
         assert_eq!(s.atlas.segment.max_charts, Some(12));
         assert_eq!(s.atlas.parameterize.max_area_ratio, Some(3.0));
         assert_eq!(s.atlas.parameterize.max_stretch, Some(1.2));
+        assert_eq!(s.atlas.parameterize.max_linf, Some(4.5));
         assert_eq!(s.atlas.parameterize.merge_passes, 2);
         assert_eq!(s.atlas.parameterize.merge_max_chart_fraction, Some(0.25));
         assert_eq!(s.atlas.segment.lscm.feature_fraction, 0.1);
@@ -447,7 +460,11 @@ mod tests {
         let absent: OptionsJson = serde_json::from_str("{}").unwrap();
         assert_eq!(
             absent.to_settings().unwrap().atlas.parameterize.max_stretch,
-            Some(1.1)
+            Some(1.07)
+        );
+        assert_eq!(
+            absent.to_settings().unwrap().atlas.parameterize.max_linf,
+            Some(3.0)
         );
         let null: OptionsJson = serde_json::from_str(r#"{"max_stretch":null}"#).unwrap();
         assert_eq!(null.max_stretch, Some(None));
@@ -455,6 +472,11 @@ mod tests {
         assert_eq!(s.atlas.parameterize.max_stretch, None);
         let back = serde_json::to_string(&OptionsJson::effective(&s)).unwrap();
         assert!(back.contains(r#""max_stretch":null"#), "{back}");
+        let null: OptionsJson = serde_json::from_str(r#"{"max_linf":null}"#).unwrap();
+        let s = null.to_settings().unwrap();
+        assert_eq!(s.atlas.parameterize.max_linf, None);
+        let back = serde_json::to_string(&OptionsJson::effective(&s)).unwrap();
+        assert!(back.contains(r#""max_linf":null"#), "{back}");
     }
 
     #[test]
@@ -481,6 +503,7 @@ mod tests {
             (r#"{"texels_per_unit":-1}"#, "texels_per_unit"),
             (r#"{"max_area_ratio":0.5}"#, "max_area_ratio"),
             (r#"{"max_stretch":0.9}"#, "max_stretch"),
+            (r#"{"max_linf":0.5}"#, "max_linf"),
             (r#"{"feature_fraction":2}"#, "lscm.feature_fraction"),
             (r#"{"hard_edge_angle_deg":0}"#, "hard_edge_angle_deg"),
             (r#"{"hard_edge_angle_deg":181}"#, "hard_edge_angle_deg"),

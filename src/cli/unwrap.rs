@@ -62,9 +62,13 @@ pub struct OptionFlags {
     #[arg(long)]
     pub max_charts: Option<usize>,
     /// Largest Sander L2 stretch of a chart before validation splits it (>= 1), or `none` for
-    /// no bound. Default 1.1.
+    /// no bound. Default 1.07.
     #[arg(long, value_parser = parse_max_stretch)]
     pub max_stretch: Option<OrNone>,
+    /// Largest Sander L∞ stretch of a chart before validation splits it (>= 1), or `none` for
+    /// no bound. Default 3.
+    #[arg(long, value_parser = parse_max_linf)]
+    pub max_linf: Option<OrNone>,
     /// The LSCM paper's area test: largest per-chart spread of face area ratios before a chart
     /// is split (>= 1, the paper uses 2). Default: off.
     #[arg(long)]
@@ -136,6 +140,7 @@ impl OptionFlags {
             rotations: self.rotations,
             max_charts: self.max_charts,
             max_stretch: self.max_stretch.map(|b| b.0),
+            max_linf: self.max_linf.map(|b| b.0),
             max_area_ratio: self.max_area_ratio,
             merge_passes: self.merge_passes,
             merge_max_chart_fraction: self.merge_max_chart_fraction.map(|b| b.0),
@@ -167,7 +172,7 @@ fn parse_resolution(s: &str) -> Result<ResolutionJson, String> {
     }
 }
 
-/// `--max-stretch` and `--hard-edge-angle-deg`: a number, or `none` (a newtype: clap reads a
+/// `--max-stretch`, `--max-linf` and `--hard-edge-angle-deg`: a number, or `none` (a newtype: clap reads a
 /// bare `Option<Option<_>>` as "flag with an optional value").
 #[derive(Debug, Clone, Copy)]
 pub struct OrNone(pub Option<f64>);
@@ -182,7 +187,11 @@ fn parse_or_none(s: &str, what: &str, example: &str) -> Result<OrNone, String> {
 }
 
 fn parse_max_stretch(s: &str) -> Result<OrNone, String> {
-    parse_or_none(s, "a stretch bound", "1.1")
+    parse_or_none(s, "a stretch bound", "1.07")
+}
+
+fn parse_max_linf(s: &str) -> Result<OrNone, String> {
+    parse_or_none(s, "a stretch bound", "3")
 }
 
 fn parse_fraction(s: &str) -> Result<OrNone, String> {

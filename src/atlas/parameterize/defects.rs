@@ -14,6 +14,7 @@
 //!
 //! Units: UVs and positions in model units; angles in radians; stretch is Sander et al. 2001's
 //! L2 stretch of the chart scaled to UV area = model area (1 is isometric).
+use super::stretch::{chart_stretch, zero_model_area, StretchChart};
 use super::{ChartMap, ParameterizeError, ParameterizeOptions};
 use crate::mesh::FaceId;
 
@@ -40,10 +41,13 @@ pub enum ChartDefect {
         max_face: FaceId,
     },
     /// The chart's Sander L2 stretch, the chart scaled to UV area = model area, is above
-    /// [`ParameterizeOptions::max_stretch`].
+    /// [`ParameterizeOptions::max_stretch`], or its L∞ stretch above
+    /// [`ParameterizeOptions::max_linf`].
     Stretch {
         /// The chart's L2 stretch (1 is isometric).
         l2: f64,
+        /// The chart's L∞ stretch, when it was measured (only against `max_linf`).
+        linf: Option<f64>,
         /// The face with the smallest model area per UV area.
         min_face: FaceId,
         /// The face with the largest model area per UV area.
@@ -79,7 +83,10 @@ pub(super) fn find_defect(
             faces: [faces[i], faces[j]],
         });
     }
-    if options.max_area_ratio.is_none() && options.max_stretch.is_none() {
+    if options.max_area_ratio.is_none()
+        && options.max_stretch.is_none()
+        && options.max_linf.is_none()
+    {
         return None;
     }
     // Per face: model area, UV area (> 0: no flips here), and Sander's (a + c) / 2.
@@ -126,16 +133,31 @@ pub(super) fn find_defect(
     ) else {
         return None;
     };
-    if let Some(max_stretch) = options.max_stretch {
-        // The chart scaled to UV area = model area (as the packer does) multiplies a and c by
-        // sum2 / sum3.
-        let l2 = (sum_l2 * sum2 / (sum3 * sum3)).sqrt();
-        if l2 > max_stretch {
-            return Some(ChartDefect::Stretch {
-                l2,
-                min_face: faces[lo.1],
-                max_face: faces[hi.1],
-            });
+    // The chart scaled to UV area = model area (as the packer does) multiplies a and c by
+    // sum2 / sum3.
+    let l2 = (sum_l2 * sum2 / (sum3 * sum3)).sqrt();
+    let stretch = |linf: Option<f64>| ChartDefect::Stretch {
+        l2,
+        linf,
+        min_face: faces[lo.1],
+        max_face: faces[hi.1],
+    };
+    if options.max_stretch.is_some_and(|bound| l2 > bound) {
+        return Some(stretch(None));
+    }
+    if let Some(bound) = options.max_linf {
+        let zero: Vec<bool> = cm
+            .triangles
+            .iter()
+            .map(|t| zero_model_area(cm, t))
+            .collect();
+        let chart = StretchChart {
+            positions_m: &cm.positions_m,
+            triangles: &cm.triangles,
+            zero_area: &zero,
+        };
+        if let Some((_, linf)) = chart_stretch(&chart, &map.uv).filter(|s| s.1 > bound) {
+            return Some(stretch(Some(linf)));
         }
     }
     let max_ratio = options.max_area_ratio?;

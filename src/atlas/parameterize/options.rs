@@ -27,8 +27,16 @@ pub struct ParameterizeOptions {
     /// Ratio `>= 1` (1 is isometric). A chart above it is split from its faces of smallest and
     /// largest model area per UV area, like the paper's area test. Since the atlas' global L2
     /// stretch is the area-weighted quadratic mean of the charts' (as the report measures it), it
-    /// is then at most this bound too. Default `Some(1.1)`.
+    /// is then at most this bound too. Tested on the map the stretch optimisation makes when
+    /// [`Self::stretch_optimization`] is on (the chart's global descent runs before the test).
+    /// Default `Some(1.07)`.
     pub max_stretch: Option<f64>,
+    /// Largest allowed Sander L∞ stretch of a chart (the same scaling as [`Self::max_stretch`]:
+    /// the larger of the largest singular value and the inverse of the smallest over its faces),
+    /// or `None` for no bound. Ratio `>= 1`. A chart above it is split like one above
+    /// `max_stretch`. Default `Some(3.0)`. Trade-off: the L2 bound alone lets a chart keep a
+    /// few badly stretched faces (the long tail of L∞ on scans); a lower bound cuts more charts.
+    pub max_linf: Option<f64>,
     /// Passes of the merge-back of valid charts into a neighbour (see `merge_back`): the first
     /// pass tries only the small charts, later ones every chart; merging stops early after a
     /// later pass without a merge. A count; 0 disables merging. Default 3. Trade-off: each later
@@ -133,7 +141,8 @@ impl Default for ParameterizeOptions {
         Self {
             max_area_ratio: None,
             area_ratio_trim: 0.0,
-            max_stretch: Some(1.1),
+            max_stretch: Some(1.07),
+            max_linf: Some(3.0),
             merge_passes: 3,
             merge_max_chart_fraction: Some(0.10),
             flatten: FlattenOptions::default(),
@@ -153,6 +162,7 @@ impl ParameterizeOptions {
             max_area_ratio: Some(2.0),
             area_ratio_trim: 0.0,
             max_stretch: None,
+            max_linf: None,
             ..Self::default()
         }
     }
@@ -180,7 +190,15 @@ impl ParameterizeOptions {
             if !(r >= 1.0 && r.is_finite()) {
                 return Err(ParameterizeChartsError::InvalidOption {
                     option: "max_stretch",
-                    detail: format!("{r} is not a finite ratio >= 1; use e.g. 1.1, or None"),
+                    detail: format!("{r} is not a finite ratio >= 1; use e.g. 1.07, or None"),
+                });
+            }
+        }
+        if let Some(r) = self.max_linf {
+            if !(r >= 1.0 && r.is_finite()) {
+                return Err(ParameterizeChartsError::InvalidOption {
+                    option: "max_linf",
+                    detail: format!("{r} is not a finite ratio >= 1; use e.g. 3, or None"),
                 });
             }
         }
