@@ -248,7 +248,7 @@ impl Occupancy {
         // The least grid end of a first fit found so far; `i32::MAX` while there is none.
         let bound = AtomicI32::new(i32::MAX);
         // The runs of `D` and the candidates `(end, x)` of every orientation.
-        let searched: Vec<(usize, Vec<(i32, i32, i32)>, Vec<(i32, i32)>)> = (0..orientations.len())
+        let searched: Vec<Searched> = (0..orientations.len())
             .into_par_iter()
             .filter(|&k| usable[k])
             .filter_map(|k| {
@@ -599,6 +599,12 @@ fn spread_out(rows: &[(i32, i32, i32)], key: usize) -> Vec<(i32, i32, i32)> {
     }
     out
 }
+
+/// Runs `(row, first, last)` of a set of texels relative to a grid origin.
+type Runs = Vec<(i32, i32, i32)>;
+
+/// One orientation's search: its index, the runs of its `D` and its candidates `(end, x)`.
+type Searched = (usize, Runs, Vec<(i32, i32)>);
 
 /// How many canvas rows below the highest first fit ([`Occupancy::find`]) candidates are
 /// still scored. Trade-off: fewer rows miss better-touching positions, more rows cost time
