@@ -36,7 +36,10 @@
 //! per word: each run `[a, b]` of `D` (the longest first, then the others spread out) keeps
 //! only the positions where it lies inside one free run `[s, e]` of its canvas row — the
 //! positions `s − a ..= e − b`, read from the row's sorted free runs, so a run costs the
-//! words still alive plus the free runs they meet — until none is left or every run is done.
+//! words still alive plus the free runs they meet; where a canvas row is cut into many short
+//! free runs (pages of thousands of charts) its free bits eroded by the run's length with
+//! log-step shifts are cheaper and give the same bits — until none is left or every run is
+//! done.
 //! The orientations are searched in parallel, sharing the least first-fit end found so far
 //! as a bound (never below `E`, so every search still collects every candidate within
 //! [`CANDIDATE_ROWS`] of `E`): the same placement whatever the thread count. Only the
@@ -139,6 +142,13 @@ impl Row {
         emit(i64::from(self.last) + 1, end);
     }
 
+    /// How many inner free runs meet columns `lo..=hi` (the outer two not counted). O(log runs).
+    fn free_runs_met(&self, lo: i64, hi: i64) -> usize {
+        let k0 = self.inner.partition_point(|g| i64::from(g.1) < lo);
+        let k1 = self.inner.partition_point(|g| i64::from(g.0) <= hi);
+        k1.saturating_sub(k0)
+    }
+
     /// Longest free run within columns `x0..x1`, which hold every occupied texel of the row.
     fn max_gap(&self, x0: i32, x1: i32) -> i32 {
         if self.first > self.last {
@@ -214,6 +224,30 @@ impl Occupancy {
             let lo = if k == x0 / 64 { x0 % 64 } else { 0 };
             let hi = if k == x1 / 64 { x1 % 64 } else { 63 };
             *w |= (u64::MAX >> (63 - hi)) & (u64::MAX << lo);
+        }
+    }
+
+    /// `words` × 64 bits of the *free* texels of row `y` from column `x` on (bit `j` of the
+    /// string: column `x + j`), appended to `out`; columns outside the canvas count as occupied.
+    fn free_words(&self, y: usize, x: i64, words: usize, out: &mut Vec<u64>) {
+        let row = &self.bits[y * self.words_per_row..][..self.words_per_row];
+        let word = |k: i64| -> u64 {
+            if k < 0 || k as usize >= row.len() {
+                0
+            } else {
+                !row[k as usize]
+            }
+        };
+        let (k0, o) = (x.div_euclid(64), x.rem_euclid(64) as u32);
+        if o == 0 {
+            out.extend((0..words as i64).map(|k| word(k0 + k)));
+        } else {
+            let mut low = word(k0);
+            for k in 1..=words as i64 {
+                let high = word(k0 + k);
+                out.push((low >> o) | (high << (64 - o)));
+                low = high;
+            }
         }
     }
 
@@ -511,21 +545,50 @@ impl Occupancy {
             // Position j reads columns base + j ..= base + j + span.
             let base = i64::from(x_lo) + i64::from(a);
             let (j_lo, j_hi) = (64 * first as i64, 64 * last as i64 + 63);
+            let row = &self.rows[(y + r) as usize];
+            let out_words = last - first + 1;
+            let len = (b - a + 1) as usize;
+            // Two exact ways to the same bits; the cheaper by its word operations: the free runs
+            // met (few on most rows), or the free bits eroded by the span's length by log-step
+            // shifts (rows cut into many short runs, as on pages of thousands of charts).
+            let met = row.free_runs_met(base + j_lo, base + j_hi + span);
+            let shift_words = (out_words + (len - 1).div_ceil(64) + 1)
+                * (usize::BITS - len.leading_zeros()) as usize;
+            if 4 * met > shift_words {
+                let start = base + j_lo;
+                let words = out_words + (len - 1).div_ceil(64) + 1;
+                window.clear();
+                self.free_words((y + r) as usize, start, words, window);
+                let mut done = 1usize;
+                while done < len {
+                    let shift = done.min(len - done);
+                    shift_and(window, shift);
+                    done += shift;
+                }
+                for (f, w) in fit[first..=last].iter_mut().zip(window.iter()) {
+                    *f &= *w;
+                }
+                while first <= last && fit[first] == 0 {
+                    first += 1;
+                }
+                if first > last {
+                    return None;
+                }
+                while fit[last] == 0 {
+                    last -= 1;
+                }
+                continue;
+            }
             window.clear();
-            window.resize(last - first + 1, 0);
+            window.resize(out_words, 0);
             let mut any = false;
-            self.rows[(y + r) as usize].free_runs(
-                base + j_lo,
-                base + j_hi + span,
-                canvas_end,
-                |s, e| {
-                    let (p, q) = ((s - base).max(j_lo), (e - span - base).min(j_hi));
-                    if p <= q {
-                        set_bits(window, (p - j_lo) as usize, (q - j_lo) as usize);
-                        any = true;
-                    }
-                },
-            );
+            row.free_runs(base + j_lo, base + j_hi + span, canvas_end, |s, e| {
+                let (p, q) = ((s - base).max(j_lo), (e - span - base).min(j_hi));
+                if p <= q {
+                    set_bits(window, (p - j_lo) as usize, (q - j_lo) as usize);
+                    any = true;
+                }
+            });
             if !any {
                 return None;
             }
@@ -727,10 +790,36 @@ fn ring_runs(rows: &[(i32, i32, i32)], h: i32) -> Vec<(i32, i32, i32)> {
     out
 }
 
+/// `v &= v >> shift` over a little-endian multi-word bit string (bit `j` of the result: bits
+/// `j` and `j + shift` of `v`; bits past the end count as clear). In place, low words first
+/// (each reads only words at or above its own, not yet written).
+fn shift_and(v: &mut [u64], shift: usize) {
+    let (ws, bs) = (shift / 64, (shift % 64) as u32);
+    let n = v.len();
+    if ws >= n {
+        v.fill(0);
+        return;
+    }
+    // Words whose sources are all inside `v`, then the tail.
+    let inner = n - ws - 1;
+    if bs == 0 {
+        for k in 0..n - ws {
+            v[k] &= v[k + ws];
+        }
+    } else {
+        for k in 0..inner {
+            v[k] &= (v[k + ws] >> bs) | (v[k + ws + 1] << (64 - bs));
+        }
+        v[inner] &= v[n - 1] >> bs;
+    }
+    v[n - ws..].fill(0);
+}
+
 #[cfg(test)]
 mod tests {
     use super::{
-        d_rows, ring_runs, spread_out, Occupancy, RingBits, Row, ScanBuffers, CANDIDATE_ROWS,
+        d_rows, ring_runs, shift_and, spread_out, Occupancy, RingBits, Row, ScanBuffers,
+        CANDIDATE_ROWS,
     };
     use crate::atlas::pack::place::{orientations, prepare_chart};
     use crate::atlas::pack::test_charts::{mixed_set, xorshift64};
@@ -1114,5 +1203,27 @@ mod tests {
             occupied += usize::from(expected > 0);
         }
         assert!(edge > 50 && occupied > 200, "{edge} {occupied}");
+    }
+
+    #[test]
+    fn shift_and_matches_a_plain_array() {
+        let mut seed = 0x1234_5678_9abc_def1u64;
+        let mut next = || xorshift64(&mut seed);
+        for n in 1..6usize {
+            for shift in [0usize, 1, 5, 63, 64, 65, 100, 127, 128, 200, 400] {
+                let v: Vec<u64> = (0..n).map(|_| next() | next()).collect();
+                let bit =
+                    |v: &[u64], j: usize| j < 64 * v.len() && (v[j / 64] >> (j % 64)) & 1 == 1;
+                let mut w = v.clone();
+                shift_and(&mut w, shift);
+                for j in 0..64 * n {
+                    assert_eq!(
+                        bit(&w, j),
+                        bit(&v, j) && bit(&v, j + shift),
+                        "n {n} shift {shift} bit {j}"
+                    );
+                }
+            }
+        }
     }
 }
