@@ -33,17 +33,23 @@
 //! searched rows is decided). [`Occupancy::first_fit_only`] is the plain first fit: the least
 //! `(y + height, x, orientation)`. A canvas row is skipped at once when one of the chart's
 //! runs is longer than its longest free run. Along a row all positions are tested at once, 64
-//! per word: each run of `D` (the longest first, then the others spread out) clears the
-//! positions where it meets an occupied texel — the free bits of its canvas row eroded by the
-//! run's length (log-step shifts), shifted by `a` — until none is left or every run is done.
+//! per word: each run `[a, b]` of `D` (the longest first, then the others spread out) keeps
+//! only the positions where it lies inside one free run `[s, e]` of its canvas row — the
+//! positions `s − a ..= e − b`, read from the row's sorted free runs, so a run costs the
+//! words still alive plus the free runs they meet; where a canvas row is cut into many short
+//! free runs (pages of thousands of charts) its free bits eroded by the run's length with
+//! log-step shifts are cheaper and give the same bits — until none is left or every run is
+//! done.
 //! The orientations are searched in parallel, sharing the least first-fit end found so far
 //! as a bound (never below `E`, so every search still collects every candidate within
-//! [`CANDIDATE_ROWS`] of `E`): the same placement whatever the thread count.
+//! [`CANDIDATE_ROWS`] of `E`): the same placement whatever the thread count. Only the
+//! candidates within [`CANDIDATE_ROWS`] of `E` are scored (their contact counted), once `E`
+//! is known.
 //!
 //! Units: texels (`i32` canvas coordinates).
 //!
 //! Cost per orientation: O(box rows × runs of `D`) for the row filter at worst, plus per
-//! surviving row O(runs × (box width / 64 + length / 64) × log length) word operations
+//! surviving row O(runs × (box width / 64 + free runs of the canvas row)) word operations
 //! (fewer: only the words between the first and last position still possible are worked on,
 //! and the row stops when none is left), for the rows down to its first fit and
 //! [`CANDIDATE_ROWS`] more; per candidate O(ring runs × run length / 64); per commit,
@@ -110,6 +116,37 @@ impl Row {
             self.inner.splice(lo..hi, rest[..n].iter().copied());
         }
         self.inner_max = self.inner.iter().map(|g| g.1 - g.0 + 1).max().unwrap_or(0);
+    }
+
+    /// Calls `f(s, e)` for every maximal free run `s..=e` of the columns `0..=end` (`end` at or
+    /// past the last occupied column) that meets columns `lo..=hi`, left to right. Cost:
+    /// O(log runs + runs met).
+    fn free_runs(&self, lo: i64, hi: i64, end: i64, mut f: impl FnMut(i64, i64)) {
+        let mut emit = |s: i64, e: i64| {
+            if s <= e && e >= lo && s <= hi {
+                f(s, e);
+            }
+        };
+        if self.first > self.last {
+            emit(0, end);
+            return;
+        }
+        emit(0, i64::from(self.first) - 1);
+        let k = self.inner.partition_point(|g| i64::from(g.1) < lo);
+        for &(s, e) in &self.inner[k..] {
+            if i64::from(s) > hi {
+                break;
+            }
+            emit(i64::from(s), i64::from(e));
+        }
+        emit(i64::from(self.last) + 1, end);
+    }
+
+    /// How many inner free runs meet columns `lo..=hi` (the outer two not counted). O(log runs).
+    fn free_runs_met(&self, lo: i64, hi: i64) -> usize {
+        let k0 = self.inner.partition_point(|g| i64::from(g.1) < lo);
+        let k1 = self.inner.partition_point(|g| i64::from(g.0) <= hi);
+        k1.saturating_sub(k0)
     }
 
     /// Longest free run within columns `x0..x1`, which hold every occupied texel of the row.
@@ -244,46 +281,53 @@ impl Occupancy {
         let window = if self.scored { CANDIDATE_ROWS } else { 0 };
         // The least grid end of a first fit found so far; `i32::MAX` while there is none.
         let bound = AtomicI32::new(i32::MAX);
-        // (end, x, orientation, contact) of every candidate.
-        let found: Vec<(i32, i32, usize, i64)> = (0..orientations.len())
+        // The runs of `D` and the candidates `(end, x)` of every orientation.
+        let searched: Vec<Searched> = (0..orientations.len())
             .into_par_iter()
             .filter(|&k| usable[k])
-            .flat_map_iter(|k| {
+            .filter_map(|k| {
                 let o = &orientations[k];
                 let rows = if self.scored {
                     d_rows(o)
                 } else {
                     o.dilated.as_ref().map(hull_rows)
-                };
-                let Some(rows) = rows else {
-                    return Vec::new();
-                };
+                }?;
                 let cands = self.candidates(bbox, o, &rows, &gaps, window, &bound);
-                if cands.is_empty() {
+                (!cands.is_empty()).then_some((k, rows, cands))
+            })
+            .collect();
+        let first_end = searched
+            .iter()
+            .flat_map(|(_, _, c)| c.iter().map(|c| c.0))
+            .min()?;
+        // (end, x, orientation, contact) of the candidates within `window` rows of the first
+        // fit (only they are scored: the contact of the others is never computed).
+        let found: Vec<(i32, i32, usize, i64)> = searched
+            .par_iter()
+            .flat_map_iter(|(k, rows, cands)| {
+                let k = *k;
+                let near = cands.iter().filter(|c| c.0 <= first_end + window);
+                if !self.scored {
+                    return near.map(|&(end, x)| (end, x, k, 0)).collect::<Vec<_>>();
+                }
+                let near: Vec<(i32, i32)> = near.copied().collect();
+                if near.is_empty() {
                     return Vec::new();
                 }
-                if !self.scored {
-                    return cands.into_iter().map(|(end, x)| (end, x, k, 0)).collect();
-                }
-                let ring = ring_runs(&rows, o.height_texels as i32);
-                let h = o.height_texels as i32;
-                cands
-                    .into_iter()
-                    .map(|(end, x)| (end, x, k, self.contact(bbox, &ring, x, end - h)))
+                let h = orientations[k].height_texels as i32;
+                let ring = RingBits::new(&ring_runs(rows, h));
+                near.into_iter()
+                    .map(|(end, x)| (end, x, k, self.contact_bits(bbox, &ring, x, end - h)))
                     .collect()
             })
             .collect();
-        let first_end = found.iter().map(|f| f.0).min()?;
         // Score: 2 · contact − rows below the highest first fit (see the module doc).
         let score = |c: &(i32, i32, usize, i64)| 2 * c.3 - i64::from(c.0 - first_end);
-        let best = found
-            .iter()
-            .filter(|c| c.0 <= first_end + window)
-            .min_by(|a, b| {
-                score(b)
-                    .cmp(&score(a))
-                    .then((a.0, a.1, a.2).cmp(&(b.0, b.1, b.2)))
-            })?;
+        let best = found.iter().min_by(|a, b| {
+            score(b)
+                .cmp(&score(a))
+                .then((a.0, a.1, a.2).cmp(&(b.0, b.1, b.2)))
+        })?;
         Some(Placement {
             orientation: best.2,
             x: best.1,
@@ -293,7 +337,9 @@ impl Occupancy {
 
     /// Texels of the ring `ring` (runs `(row, first, last)` relative to a grid origin, see
     /// [`ring_runs`]) placed at grid origin `(x, y)` that are occupied or outside `bbox`: how
-    /// much of the chart's padded outline touches placed charts or the page edge.
+    /// much of the chart's padded outline touches placed charts or the page edge. The
+    /// reference of [`Self::contact_bits`], which the search uses.
+    #[cfg(test)]
     fn contact(&self, bbox: [i32; 4], ring: &[(i32, i32, i32)], x: i32, y: i32) -> i64 {
         let [x0, y0, x1, y1] = bbox;
         let mut n = 0i64;
@@ -314,6 +360,7 @@ impl Occupancy {
     }
 
     /// Occupied texels of canvas row `y` in columns `s..=e`.
+    #[cfg(test)]
     fn count_occupied(&self, y: usize, s: usize, e: usize) -> i64 {
         let row = &self.bits[y * self.words_per_row..][..self.words_per_row];
         let mut n = 0i64;
@@ -322,6 +369,61 @@ impl Occupancy {
             let hi = if k == e / 64 { e % 64 } else { 63 };
             let m = (u64::MAX >> (63 - hi)) & (u64::MAX << lo);
             n += i64::from((w & m).count_ones());
+        }
+        n
+    }
+
+    /// [`Self::contact`] of the ring as [`RingBits`], word by word: the same count, with
+    /// O(ring rows × ring width / 64) word operations instead of one bit loop per run.
+    fn contact_bits(&self, bbox: [i32; 4], ring: &RingBits, x: i32, y: i32) -> i64 {
+        let [x0, y0, x1, y1] = bbox;
+        let words = ring.words;
+        // Bit j of a ring row is column x + ring.left + j; the box keeps bits jlo..=jhi.
+        let left = i64::from(x) + i64::from(ring.left);
+        let (jlo, jhi) = (i64::from(x0) - left, i64::from(x1) - 1 - left);
+        let mut n = 0i64;
+        for (q, &(r, count)) in ring.rows.iter().enumerate() {
+            let cy = y + r;
+            if cy < y0 || cy >= y1 {
+                n += i64::from(count);
+                continue;
+            }
+            let bits = &ring.bits[q * words..][..words];
+            let row = &self.bits[cy as usize * self.words_per_row..][..self.words_per_row];
+            let word = |k: i64| -> u64 {
+                if k < 0 || k as usize >= row.len() {
+                    0
+                } else {
+                    row[k as usize]
+                }
+            };
+            let whole = jlo <= 0 && jhi >= 64 * words as i64 - 1;
+            for (k, &rw) in bits.iter().enumerate() {
+                if rw == 0 {
+                    continue;
+                }
+                // 64 canvas texels from column left + 64k.
+                let c = left + 64 * k as i64;
+                let (kc, o) = (c.div_euclid(64), c.rem_euclid(64) as u32);
+                let canvas = if o == 0 {
+                    word(kc)
+                } else {
+                    (word(kc) >> o) | (word(kc + 1) << (64 - o))
+                };
+                if whole {
+                    n += i64::from((rw & canvas).count_ones());
+                } else {
+                    let (a, b) = (jlo - 64 * k as i64, jhi - 64 * k as i64);
+                    let inside = if a > 63 || b < 0 || a > b {
+                        0
+                    } else {
+                        let (a, b) = (a.max(0) as u32, b.min(63) as u32);
+                        (u64::MAX >> (63 - b)) & (u64::MAX << a)
+                    };
+                    n += i64::from((rw & !inside).count_ones())
+                        + i64::from((rw & inside & canvas).count_ones());
+                }
+            }
         }
         n
     }
@@ -359,15 +461,14 @@ impl Occupancy {
         if needed_texels > free_texels {
             return out;
         }
-        let mut rows = rows.to_vec();
-        // Longest run first (ties: first run): it rejects most canvas rows.
+        // Longest run first (ties: first run): it rejects most canvas rows. The others spread
+        // out (bit-reversed order of their row): far-apart rows are less alike than
+        // neighbours, so the positions left die sooner. (The order only decides how soon a
+        // canvas row is rejected, never whether.)
         let key = (0..rows.len())
             .max_by_key(|&i| (rows[i].2 - rows[i].1, std::cmp::Reverse(i)))
             .unwrap_or(0);
-        rows.swap(0, key);
-        // The others spread out (bit-reversed order of their row): far-apart rows are
-        // less alike than neighbours, so the positions left die sooner.
-        rows[1..].sort_by_key(|&(r, _, _)| (r as u32).reverse_bits());
+        let rows = spread_out(rows, key);
         let mut buffers = ScanBuffers::default();
         let (x_lo, x_hi) = (x0, x1 - w);
         let mut own_end: Option<i32> = None;
@@ -412,11 +513,12 @@ impl Occupancy {
 
     /// The smallest `x` in `x_lo..=x_hi` where every chart row `(r, a, b)` finds canvas row
     /// `y + r` free in `x + a ..= x + b`, bit-parallel: `fit` holds one bit per position
-    /// (`x_lo + j`), and each chart row clears the positions where its span meets an occupied
-    /// texel (the free bits of its canvas row eroded by its length, shifted by `a`). Only the
-    /// words between the first and the last position still possible are worked on, and the
-    /// scan stops when none is left. Cost: O(chart rows × (positions / 64) × log length) word
-    /// operations at worst.
+    /// (`x_lo + j`), and each chart row keeps only the positions where its span lies inside
+    /// one free run `[s, e]` of its canvas row (the positions `s - a ..= e - b`, from the
+    /// sorted free runs of [`Row`]: the free bits eroded by the span's length, without
+    /// touching the occupied bits). Only the words between the first and the last position
+    /// still possible are worked on, and the scan stops when none is left. Cost per chart
+    /// row: O(words still possible + free runs of its canvas row met by them) word operations.
     fn scan_row(
         &self,
         y: i32,
@@ -435,21 +537,60 @@ impl Occupancy {
         if positions % 64 != 0 {
             *fit.last_mut().expect("at least one position") = (1u64 << (positions % 64)) - 1;
         }
+        // Columns past the bitmap's words count as occupied (and before column 0).
+        let canvas_end = (64 * self.words_per_row) as i64 - 1;
         let (mut first, mut last) = (0usize, fit.len() - 1);
         for &(r, a, b) in rows {
-            let len = (b - a + 1) as usize;
-            // Window bit j: column x_lo + 64·first + a + j of the canvas row.
-            let start = i64::from(x_lo) + 64 * first as i64 + i64::from(a);
+            let span = i64::from(b - a);
+            // Position j reads columns base + j ..= base + j + span.
+            let base = i64::from(x_lo) + i64::from(a);
+            let (j_lo, j_hi) = (64 * first as i64, 64 * last as i64 + 63);
+            let row = &self.rows[(y + r) as usize];
             let out_words = last - first + 1;
-            let words = out_words + (len - 1).div_ceil(64) + 1;
+            let len = (b - a + 1) as usize;
+            // Two exact ways to the same bits; the cheaper by its word operations: the free runs
+            // met (few on most rows), or the free bits eroded by the span's length by log-step
+            // shifts (rows cut into many short runs, as on pages of thousands of charts).
+            let met = row.free_runs_met(base + j_lo, base + j_hi + span);
+            let shift_words = (out_words + (len - 1).div_ceil(64) + 1)
+                * (usize::BITS - len.leading_zeros()) as usize;
+            if 4 * met > shift_words {
+                let start = base + j_lo;
+                let words = out_words + (len - 1).div_ceil(64) + 1;
+                window.clear();
+                self.free_words((y + r) as usize, start, words, window);
+                let mut done = 1usize;
+                while done < len {
+                    let shift = done.min(len - done);
+                    shift_and(window, shift);
+                    done += shift;
+                }
+                for (f, w) in fit[first..=last].iter_mut().zip(window.iter()) {
+                    *f &= *w;
+                }
+                while first <= last && fit[first] == 0 {
+                    first += 1;
+                }
+                if first > last {
+                    return None;
+                }
+                while fit[last] == 0 {
+                    last -= 1;
+                }
+                continue;
+            }
             window.clear();
-            self.free_words((y + r) as usize, start, words, window);
-            // Erosion: bit j stays set when bits j ..= j + len - 1 are all free (doubling).
-            let mut span = 1usize;
-            while span < len {
-                let shift = span.min(len - span);
-                shift_and(window, shift);
-                span += shift;
+            window.resize(out_words, 0);
+            let mut any = false;
+            row.free_runs(base + j_lo, base + j_hi + span, canvas_end, |s, e| {
+                let (p, q) = ((s - base).max(j_lo), (e - span - base).min(j_hi));
+                if p <= q {
+                    set_bits(window, (p - j_lo) as usize, (q - j_lo) as usize);
+                    any = true;
+                }
+            });
+            if !any {
+                return None;
             }
             for (f, w) in fit[first..=last].iter_mut().zip(window.iter()) {
                 *f &= *w;
@@ -468,6 +609,65 @@ impl Occupancy {
         Some(x_lo + j as i32)
     }
 }
+
+/// Sets bits `p..=q` of a little-endian multi-word bit string.
+fn set_bits(v: &mut [u64], p: usize, q: usize) {
+    for (k, w) in v.iter_mut().enumerate().take(q / 64 + 1).skip(p / 64) {
+        let lo = if k == p / 64 { p % 64 } else { 0 };
+        let hi = if k == q / 64 { q % 64 } else { 63 };
+        *w |= (u64::MAX >> (63 - hi)) & (u64::MAX << lo);
+    }
+}
+
+/// The runs `rows` (rows `>= 0`) in the order of the search of [`Occupancy::candidates`]:
+/// run `key` first, then the others by the bit-reversed index of their row, in their order
+/// within a row. A counting sort: O(runs + rows).
+fn spread_out(rows: &[(i32, i32, i32)], key: usize) -> Vec<(i32, i32, i32)> {
+    let mut out = Vec::with_capacity(rows.len());
+    let Some(&first) = rows.get(key) else {
+        return out;
+    };
+    out.push(first);
+    let h = rows.iter().map(|t| t.0.max(0) as usize).max().unwrap_or(0) + 1;
+    // Runs grouped by row, in their order: `by_row[start[r]..start[r + 1]]`.
+    let mut start = vec![0usize; h + 1];
+    for (i, t) in rows.iter().enumerate() {
+        if i != key {
+            start[t.0.max(0) as usize + 1] += 1;
+        }
+    }
+    for r in 0..h {
+        start[r + 1] += start[r];
+    }
+    let mut next = start.clone();
+    let mut by_row = vec![(0, 0, 0); rows.len() - 1];
+    for (i, &t) in rows.iter().enumerate() {
+        if i != key {
+            let r = t.0.max(0) as usize;
+            by_row[next[r]] = t;
+            next[r] += 1;
+        }
+    }
+    // Rows `0..h` in bit-reversed order: `i` over `0..2^bits`, row = `i` reversed in `bits`.
+    let bits = usize::BITS - (h - 1).leading_zeros();
+    for i in 0..1usize << bits {
+        let r = if bits == 0 {
+            0
+        } else {
+            i.reverse_bits() >> (usize::BITS - bits)
+        };
+        if r < h {
+            out.extend_from_slice(&by_row[start[r]..start[r + 1]]);
+        }
+    }
+    out
+}
+
+/// Runs `(row, first, last)` of a set of texels relative to a grid origin.
+type Runs = Vec<(i32, i32, i32)>;
+
+/// One orientation's search: its index, the runs of its `D` and its candidates `(end, x)`.
+type Searched = (usize, Runs, Vec<(i32, i32)>);
 
 /// How many canvas rows below the highest first fit ([`Occupancy::find`]) candidates are
 /// still scored. Trade-off: fewer rows miss better-touching positions, more rows cost time
@@ -496,6 +696,56 @@ fn hull_rows(d: &super::place::Extents) -> Vec<(i32, i32, i32)> {
         .filter(|(_, &e)| e != EMPTY)
         .map(|(r, &(a, b))| (r as i32, a, b))
         .collect()
+}
+
+/// A ring (runs `(row, first, last)` relative to a grid origin, see [`ring_runs`]) as one bit
+/// string per row that has texels: bit `j` of a row is column `left + j`.
+#[derive(Debug, Clone)]
+struct RingBits {
+    /// Least column of any run.
+    left: i32,
+    /// Words per row.
+    words: usize,
+    /// `(row, texels)` of each row, in the order of `bits`.
+    rows: Vec<(i32, u32)>,
+    bits: Vec<u64>,
+}
+
+impl RingBits {
+    /// The ring of disjoint runs `ring` (as [`ring_runs`] returns them).
+    fn new(ring: &[(i32, i32, i32)]) -> Self {
+        let left = ring.iter().map(|t| t.1).min().unwrap_or(0);
+        let right = ring.iter().map(|t| t.2).max().unwrap_or(0);
+        let top = ring.iter().map(|t| t.0).min().unwrap_or(0);
+        let bottom = ring.iter().map(|t| t.0).max().unwrap_or(-1);
+        let words = ((right - left + 1).max(1) as usize).div_ceil(64);
+        let height = (bottom - top + 1).max(0) as usize;
+        let mut all_rows: Vec<(i32, u32)> = (0..height).map(|q| (top + q as i32, 0)).collect();
+        let mut all_bits = vec![0u64; height * words];
+        for &(r, a, b) in ring {
+            let q = (r - top) as usize;
+            set_bits(
+                &mut all_bits[q * words..][..words],
+                (a - left) as usize,
+                (b - left) as usize,
+            );
+            all_rows[q].1 += (b - a + 1) as u32;
+        }
+        let mut rows = Vec::new();
+        let mut bits = Vec::new();
+        for (q, &row) in all_rows.iter().enumerate() {
+            if row.1 > 0 {
+                rows.push(row);
+                bits.extend_from_slice(&all_bits[q * words..][..words]);
+            }
+        }
+        Self {
+            left,
+            words,
+            rows,
+            bits,
+        }
+    }
 }
 
 /// The texels at Chebyshev distance exactly 1 from the runs `rows` (sorted by row, then
@@ -567,7 +817,10 @@ fn shift_and(v: &mut [u64], shift: usize) {
 
 #[cfg(test)]
 mod tests {
-    use super::{d_rows, ring_runs, shift_and, Occupancy, Row, ScanBuffers, CANDIDATE_ROWS};
+    use super::{
+        d_rows, ring_runs, shift_and, spread_out, Occupancy, RingBits, Row, ScanBuffers,
+        CANDIDATE_ROWS,
+    };
     use crate::atlas::pack::place::{orientations, prepare_chart};
     use crate::atlas::pack::test_charts::{mixed_set, xorshift64};
 
@@ -626,6 +879,29 @@ mod tests {
                     longest = longest.max(current);
                 }
                 assert_eq!(row.max_gap(0, W), longest);
+                // The free runs of columns 0..=end that meet lo..=hi: every maximal one, once.
+                let end = W + next(8);
+                let (lo, hi) = (next(W + 10) - 5, next(W + 10) - 5);
+                let free_in = |x: i32| x <= end && free(x);
+                let mut expected = Vec::new();
+                let mut x = 0;
+                while x <= end {
+                    if free_in(x) {
+                        let s = x;
+                        while x < end && free_in(x + 1) {
+                            x += 1;
+                        }
+                        if x >= lo && s <= hi {
+                            expected.push((i64::from(s), i64::from(x)));
+                        }
+                    }
+                    x += 1;
+                }
+                let mut got = Vec::new();
+                row.free_runs(i64::from(lo), i64::from(hi), i64::from(end), |s, e| {
+                    got.push((s, e))
+                });
+                assert_eq!(got, expected, "columns {lo}..={hi} up to {end}");
             }
         }
         assert!(runs > 200, "{runs}");
@@ -861,6 +1137,72 @@ mod tests {
             placed > 30 && not_first > 0,
             "{placed} placed, {not_first} below the first fit"
         );
+    }
+
+    /// The search order of the runs: the key run, then the others by bit-reversed row
+    /// (stable), as a comparison sort would give.
+    #[test]
+    fn spread_out_is_a_stable_sort_by_bit_reversed_row() {
+        let mut seed = 0x0bad_cafe_1234_5678u64;
+        let mut next = |n: i32| (xorshift64(&mut seed) % n as u64) as i32;
+        for _ in 0..300 {
+            let h = 1 + next(70);
+            let rows: Vec<(i32, i32, i32)> = (0..1 + next(150))
+                .map(|_| (next(h), next(50), next(50)))
+                .collect();
+            let key = next(rows.len() as i32) as usize;
+            let mut expected = vec![rows[key]];
+            let mut rest: Vec<_> = (0..rows.len())
+                .filter(|&i| i != key)
+                .map(|i| rows[i])
+                .collect();
+            rest.sort_by_key(|&(r, _, _)| (r as u32).reverse_bits());
+            expected.extend(rest);
+            assert_eq!(spread_out(&rows, key), expected, "key {key} rows {rows:?}");
+        }
+    }
+
+    /// The word-by-word contact of a ring agrees with the run-by-run count, on rings of
+    /// random sets (wider than a word too) at random positions, inside the box, across its
+    /// edges and outside it.
+    #[test]
+    fn contact_bits_agrees_with_contact() {
+        const W: i32 = 260;
+        const H: i32 = 60;
+        let mut seed = 0xfeed_f00d_2468_1357u64;
+        let mut next = |n: i32| (xorshift64(&mut seed) % n as u64) as i32;
+        let (occ, _) = striped_canvas([W, H], &mut next, [10, 9, 30]);
+        let bbox = [7, 4, 250, 55];
+        let (mut edge, mut occupied) = (0, 0);
+        for _ in 0..400 {
+            let wide = next(3) == 0;
+            let (w, h) = (1 + next(if wide { 150 } else { 20 }), 1 + next(12));
+            let fill = 1 + next(4);
+            let runs: Vec<(i32, i32, i32)> = (0..h)
+                .flat_map(|r| {
+                    let mut v = Vec::new();
+                    let mut x = next(3);
+                    while x < w {
+                        let e = (x + next(2 * fill + 1)).min(w - 1);
+                        v.push((r, x, e));
+                        x = e + 2 + next(4);
+                    }
+                    v
+                })
+                .collect();
+            let ring = ring_runs(&runs, h);
+            let bits = RingBits::new(&ring);
+            let (x, y) = (next(W + 20) - 10, next(H + 10) - 5);
+            let expected = occ.contact(bbox, &ring, x, y);
+            assert_eq!(
+                occ.contact_bits(bbox, &bits, x, y),
+                expected,
+                "{runs:?} at ({x}, {y})"
+            );
+            edge += usize::from(x <= bbox[0] || x + w >= bbox[2] || y <= bbox[1]);
+            occupied += usize::from(expected > 0);
+        }
+        assert!(edge > 50 && occupied > 200, "{edge} {occupied}");
     }
 
     #[test]

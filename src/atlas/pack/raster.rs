@@ -107,40 +107,63 @@ impl Mask {
         let wpr = self.words_per_row;
         // Horizontal pass: OR of the row shifted by -r ..= r, word by word with carries.
         let mut horizontal = self.clone();
-        for y in 0..self.height as usize {
-            let row = &self.bits[y * wpr..][..wpr];
-            let out = &mut horizontal.bits[y * wpr..][..wpr];
-            for s in 1..=r as usize {
-                let (ws, bs) = (s / 64, (s % 64) as u32);
-                for k in 0..wpr {
-                    // Towards higher columns: bit x goes to x + s.
-                    if k >= ws {
-                        let mut v = row[k - ws] << bs;
-                        if bs > 0 && k > ws {
-                            v |= row[k - ws - 1] >> (64 - bs);
-                        }
-                        out[k] |= v;
+        if r < 64 {
+            // Each word from its two neighbours, in one pass.
+            for (row, out) in self
+                .bits
+                .chunks_exact(wpr.max(1))
+                .zip(horizontal.bits.chunks_exact_mut(wpr.max(1)))
+            {
+                for k in 0..row.len() {
+                    let c = row[k];
+                    let prev = if k > 0 { row[k - 1] } else { 0 };
+                    let next = if k + 1 < row.len() { row[k + 1] } else { 0 };
+                    let mut acc = c;
+                    for s in 1..=r {
+                        acc |= (c << s) | (prev >> (64 - s)) | (c >> s) | (next << (64 - s));
                     }
-                    // Towards lower columns: bit x goes to x - s.
-                    if k + ws < wpr {
-                        let mut v = row[k + ws] >> bs;
-                        if bs > 0 && k + ws + 1 < wpr {
-                            v |= row[k + ws + 1] << (64 - bs);
+                    out[k] = acc;
+                }
+            }
+        } else {
+            for y in 0..self.height as usize {
+                let row = &self.bits[y * wpr..][..wpr];
+                let out = &mut horizontal.bits[y * wpr..][..wpr];
+                for s in 1..=r as usize {
+                    let (ws, bs) = (s / 64, (s % 64) as u32);
+                    for k in 0..wpr {
+                        // Towards higher columns: bit x goes to x + s.
+                        if k >= ws {
+                            let mut v = row[k - ws] << bs;
+                            if bs > 0 && k > ws {
+                                v |= row[k - ws - 1] >> (64 - bs);
+                            }
+                            out[k] |= v;
                         }
-                        out[k] |= v;
+                        // Towards lower columns: bit x goes to x - s.
+                        if k + ws < wpr {
+                            let mut v = row[k + ws] >> bs;
+                            if bs > 0 && k + ws + 1 < wpr {
+                                v |= row[k + ws + 1] << (64 - bs);
+                            }
+                            out[k] |= v;
+                        }
                     }
                 }
             }
         }
         horizontal.clear_padding_bits();
-        // Vertical pass: row y is the OR of rows y - r ..= y + r (word-wise).
+        // Vertical pass: row y is the OR of rows y - r ..= y + r (word-wise, whole rows).
         let mut out = Mask::new(self.width, self.height);
-        for y in 0..self.height as usize {
+        if wpr == 0 {
+            return out;
+        }
+        for (y, dst) in out.bits.chunks_exact_mut(wpr).enumerate() {
             let lo = y.saturating_sub(r as usize);
             let hi = (y + r as usize).min(self.height as usize - 1);
-            for src in lo..=hi {
-                for k in 0..wpr {
-                    out.bits[y * wpr + k] |= horizontal.bits[src * wpr + k];
+            for src in horizontal.bits[lo * wpr..(hi + 1) * wpr].chunks_exact(wpr) {
+                for (d, s) in dst.iter_mut().zip(src) {
+                    *d |= *s;
                 }
             }
         }
