@@ -14,7 +14,6 @@
 //!
 //! Units: UVs and positions in model units; angles in radians; stretch is Sander et al. 2001's
 //! L2 stretch of the chart scaled to UV area = model area (1 is isometric).
-use super::stretch::{chart_stretch, zero_model_area, StretchChart};
 use super::{ChartMap, ParameterizeError, ParameterizeOptions};
 use crate::mesh::FaceId;
 
@@ -92,6 +91,8 @@ pub(super) fn find_defect(
     // Per face: model area, UV area (> 0: no flips here), and Sander's (a + c) / 2.
     let mut per_face: Vec<(f64, usize, f64)> = Vec::with_capacity(cm.triangles.len());
     let (mut sum3, mut sum2, mut sum_l2) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut big2, mut small2) = (0.0f64, f64::INFINITY);
+    let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
     for (k, t) in cm.triangles.iter().enumerate() {
         let q = t.map(|i| cm.positions_m[i as usize]);
         let p = t.map(|i| map.uv[i as usize]);
@@ -116,8 +117,17 @@ pub(super) fn find_defect(
             (q[0][c] * (u[2] - u[1]) + q[1][c] * (u[0] - u[2]) + q[2][c] * (u[1] - u[0]))
                 / (2.0 * area2)
         });
-        let l2sq =
-            0.5 * (su.iter().map(|x| x * x).sum::<f64>() + sv.iter().map(|x| x * x).sum::<f64>());
+        let (a, b, c) = (dot(su, su), dot(su, sv), dot(sv, sv));
+        let l2sq = 0.5 * (a + c);
+        // Singular values² of the Jacobian (uv → 3-D), for L∞; faces of zero model area (the
+        // parameterizer's test: twice the area ≤ 1e-12 of the longest edge²) have none.
+        let e3 = [0, 1, 2].map(|k| e2[k] - e1[k]);
+        let longest2 = dot(e1, e1).max(dot(e2, e2)).max(dot(e3, e3));
+        if 2.0 * area3 > 1e-12 * longest2 {
+            let root = ((a - c) * (a - c) + 4.0 * b * b).sqrt();
+            big2 = big2.max(0.5 * (a + c + root));
+            small2 = small2.min(0.5 * (a + c - root));
+        }
         per_face.push((area3 / area2, k, area3));
         sum3 += area3;
         sum2 += area2;
@@ -146,17 +156,11 @@ pub(super) fn find_defect(
         return Some(stretch(None));
     }
     if let Some(bound) = options.max_linf {
-        let zero: Vec<bool> = cm
-            .triangles
-            .iter()
-            .map(|t| zero_model_area(cm, t))
-            .collect();
-        let chart = StretchChart {
-            positions_m: &cm.positions_m,
-            triangles: &cm.triangles,
-            zero_area: &zero,
-        };
-        if let Some((_, linf)) = chart_stretch(&chart, &map.uv).filter(|s| s.1 > bound) {
+        // The same scaling as L2 (a and c times sum2 / sum3); L∞ = max(Γ, 1/γ) over the faces,
+        // as `stretch::chart_stretch` measures it.
+        let r = sum2 / sum3;
+        let linf = (big2 * r).sqrt().max(1.0 / (small2 * r).sqrt());
+        if linf > bound {
             return Some(stretch(Some(linf)));
         }
     }

@@ -1,0 +1,407 @@
+use super::{
+    d_rows, ring_runs, shift_and, spread_out, Occupancy, RingBits, Row, ScanBuffers, CANDIDATE_ROWS,
+};
+use crate::atlas::pack::place::{orientations, prepare_chart};
+use crate::atlas::pack::test_charts::{mixed_set, xorshift64};
+
+/// A `w × h` canvas of random runs on every row: the first starts before `start`, each is
+/// up to `run` texels longer than one, and gaps are 1 + up to `gap` texels. Returns the
+/// occupancy and the same texels as a plain row-major bitmap.
+fn striped_canvas(
+    [w, h]: [i32; 2],
+    next: &mut impl FnMut(i32) -> i32,
+    [start, run, gap]: [i32; 3],
+) -> (Occupancy, Vec<bool>) {
+    let mut occ = Occupancy::new(w, h);
+    let mut taken = vec![false; (w * h) as usize];
+    for y in 0..h {
+        let mut x = next(start);
+        while x < w {
+            let e = (x + next(run)).min(w - 1);
+            occ.occupy(y, x, e);
+            (x..=e).for_each(|c| taken[(y * w + c) as usize] = true);
+            x = e + 2 + next(gap);
+        }
+    }
+    (occ, taken)
+}
+use std::collections::BTreeSet;
+
+/// A row of `W` columns filled by random disjoint runs, checked after every run against a
+/// plain array: occupancy per column, the longest free run, and the first fit of random
+/// chart rows (columns outside `0..W` are free, as on the canvas beyond the placed charts).
+#[test]
+fn a_row_agrees_with_a_plain_array() {
+    const W: i32 = 160;
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    let mut next = |n: i32| (xorshift64(&mut seed) % n as u64) as i32;
+    let mut runs = 0;
+    for _trial in 0..20 {
+        let mut row = Row::empty();
+        let mut taken = [false; W as usize];
+        for _ in 0..40 {
+            let s = next(W);
+            let e = (s + next(12)).min(W - 1);
+            if (s..=e).any(|x| taken[x as usize]) {
+                continue;
+            }
+            row.occupy(s, e);
+            runs += 1;
+            (s..=e).for_each(|x| taken[x as usize] = true);
+            let free = |x: i32| !(0..W).contains(&x) || !taken[x as usize];
+            for x in 0..W {
+                assert_eq!(row.get(x), !free(x), "column {x}");
+            }
+            let mut longest = 0;
+            let mut current = 0;
+            for x in 0..W {
+                current = if free(x) { current + 1 } else { 0 };
+                longest = longest.max(current);
+            }
+            assert_eq!(row.max_gap(0, W), longest);
+            // The free runs of columns 0..=end that meet lo..=hi: every maximal one, once.
+            let end = W + next(8);
+            let (lo, hi) = (next(W + 10) - 5, next(W + 10) - 5);
+            let free_in = |x: i32| x <= end && free(x);
+            let mut expected = Vec::new();
+            let mut x = 0;
+            while x <= end {
+                if free_in(x) {
+                    let s = x;
+                    while x < end && free_in(x + 1) {
+                        x += 1;
+                    }
+                    if x >= lo && s <= hi {
+                        expected.push((i64::from(s), i64::from(x)));
+                    }
+                }
+                x += 1;
+            }
+            let mut got = Vec::new();
+            row.free_runs(i64::from(lo), i64::from(hi), i64::from(end), |s, e| {
+                got.push((s, e))
+            });
+            assert_eq!(got, expected, "columns {lo}..={hi} up to {end}");
+        }
+    }
+    assert!(runs > 200, "{runs}");
+}
+
+/// The bit-parallel first fit of a row of positions agrees with testing every position
+/// texel by texel, on random canvases (runs crossing word boundaries, widths not a
+/// multiple of 64) and random charts (rows longer than a word, empty positions ranges).
+#[test]
+fn scan_row_finds_the_first_fit_of_a_brute_force() {
+    const W: i32 = 300;
+    const H: i32 = 24;
+    let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = |n: i32| (xorshift64(&mut seed) % n as u64) as i32;
+    let (mut found, mut none) = (0, 0);
+    for _canvas in 0..30 {
+        let density = 1 + next(6);
+        let (occ, taken) = striped_canvas([W, H], &mut next, [20, 3 * density, 90 / density]);
+        let free = |x: i32, y: i32| !taken[(y * W + x) as usize];
+        for _chart in 0..20 {
+            let h = 1 + next(6);
+            let rows: Vec<(i32, i32, i32)> = (0..h)
+                .map(|r| {
+                    let a = next(8);
+                    let long = next(4) == 0;
+                    (r, a, a + next(if long { 140 } else { 12 }))
+                })
+                .collect();
+            let width = rows.iter().map(|&(_, _, b)| b + 1).max().unwrap();
+            let mut buffers = ScanBuffers::default();
+            for y in 0..=H - h {
+                let x_lo = next(40);
+                let x_hi = (W - width - next(40)).min(W - width);
+                let expected = (x_lo..=x_hi).find(|&x| {
+                    rows.iter()
+                        .all(|&(r, a, b)| (x + a..=x + b).all(|c| free(c, y + r)))
+                });
+                let got = occ.scan_row(y, x_lo, x_hi, &rows, &mut buffers);
+                assert_eq!(got, expected, "y {y} rows {rows:?} x {x_lo}..={x_hi}");
+                if got.is_some() {
+                    // The candidates of `find` read every fitting position from `fit`.
+                    for x in x_lo..=x_hi {
+                        let j = (x - x_lo) as usize;
+                        let bit = (buffers.fit[j / 64] >> (j % 64)) & 1 == 1;
+                        let fits = rows
+                            .iter()
+                            .all(|&(r, a, b)| (x + a..=x + b).all(|c| free(c, y + r)));
+                        assert_eq!(bit, fits, "y {y} x {x} rows {rows:?}");
+                    }
+                }
+                if got.is_some() {
+                    found += 1;
+                } else {
+                    none += 1;
+                }
+            }
+        }
+    }
+    assert!(found > 200 && none > 200, "{found} found, {none} none");
+}
+
+/// Random sets of texels: the ring is exactly the texels outside the set at Chebyshev
+/// distance 1 from it, each once.
+#[test]
+fn ring_runs_are_the_texels_at_distance_one() {
+    let mut seed = 0x51f1_5eed_0dd5_eed5u64;
+    let mut next = |n: i32| (xorshift64(&mut seed) % n as u64) as i32;
+    let mut texels = 0;
+    for _ in 0..200 {
+        let (w, h) = (1 + next(20), 1 + next(12));
+        let fill = 1 + next(4);
+        let set: Vec<bool> = (0..w * h).map(|_| next(5) < fill).collect();
+        let inside = |x: i32, y: i32| {
+            (0..w).contains(&x) && (0..h).contains(&y) && set[(y * w + x) as usize]
+        };
+        let mut runs = Vec::new();
+        for y in 0..h {
+            let mut x = 0;
+            while x < w {
+                if inside(x, y) {
+                    let start = x;
+                    while x + 1 < w && inside(x + 1, y) {
+                        x += 1;
+                    }
+                    runs.push((y, start, x));
+                }
+                x += 1;
+            }
+        }
+        let mut got = BTreeSet::new();
+        for (r, a, b) in ring_runs(&runs, h) {
+            assert!(a <= b, "empty run {a}..={b}");
+            for x in a..=b {
+                assert!(got.insert((r, x)), "texel ({x}, {r}) twice");
+            }
+        }
+        let mut expected = BTreeSet::new();
+        for y in -1..=h {
+            for x in -1..=w {
+                let near = (-1..=1).any(|dy| (-1..=1).any(|dx| inside(x + dx, y + dy)));
+                if !inside(x, y) && near {
+                    expected.insert((y, x));
+                }
+            }
+        }
+        assert_eq!(got, expected, "set {w}x{h} runs {runs:?}");
+        texels += got.len();
+    }
+    assert!(texels > 2000, "{texels}");
+}
+
+/// Random canvases and rings: the contact is the number of ring texels that are occupied
+/// or outside the box.
+#[test]
+fn contact_counts_occupied_texels_and_texels_outside_the_box() {
+    const W: i32 = 200;
+    const H: i32 = 40;
+    let mut seed = 0x0c0f_fee0_dead_beefu64;
+    let mut next = |n: i32| (xorshift64(&mut seed) % n as u64) as i32;
+    let (occ, taken) = striped_canvas([W, H], &mut next, [10, 9, 30]);
+    let bbox = [10, 5, 190, 35];
+    let (mut partial, mut outside) = (0, 0);
+    for _ in 0..300 {
+        let ring: Vec<(i32, i32, i32)> = (0..1 + next(8))
+            .map(|_| {
+                let a = next(32) - 1;
+                (next(10) - 1, a, a + next(140))
+            })
+            .collect();
+        let (x, y) = (next(180) - 10, next(36) - 2);
+        let mut expected = 0;
+        let mut out = 0;
+        for &(r, a, b) in &ring {
+            for c in x + a..=x + b {
+                let cy = y + r;
+                if c < bbox[0] || c >= bbox[2] || cy < bbox[1] || cy >= bbox[3] {
+                    out += 1;
+                } else if taken[(cy * W + c) as usize] {
+                    expected += 1;
+                }
+            }
+        }
+        let got = occ.contact(bbox, &ring, x, y);
+        assert_eq!(got, expected + out, "ring {ring:?} at ({x}, {y})");
+        partial += usize::from(expected > 0);
+        outside += usize::from(out > 0);
+    }
+    assert!(partial > 100 && outside > 100, "{partial} {outside}");
+}
+
+/// Real charts on random canvases: `find` returns a position where the chart's exact `D`
+/// meets no occupied texel inside the box, and the best-scoring candidate of a brute force
+/// over every position (both ends of each run of fitting positions, on the rows within
+/// `CANDIDATE_ROWS` of the highest fit of any orientation; score 2 · contact − rows below
+/// it; ties by end, column, orientation).
+#[test]
+fn find_takes_the_best_scoring_candidate_of_a_brute_force() {
+    const W: i32 = 160;
+    const H: i32 = 120;
+    let mut seed = 0x7777_1234_abcd_0001u64;
+    let mut next = |n: i32| (xorshift64(&mut seed) % n as u64) as i32;
+    let charts = mixed_set(10, 3);
+    let (mut placed, mut not_first) = (0, 0);
+    for canvas in 0..6 {
+        let mut occ = Occupancy::new(W, H);
+        let mut taken = vec![false; (W * H) as usize];
+        let bbox = [8, 6, W - 8, H - 6];
+        for _ in 0..30 + 10 * canvas {
+            let (x, y) = (bbox[0] + next(130), bbox[1] + next(100));
+            let (w, h) = (1 + next(16), 1 + next(12));
+            for r in y..(y + h).min(bbox[3]) {
+                let e = (x + w - 1).min(bbox[2] - 1);
+                if (x..=e).any(|c| taken[(r * W + c) as usize]) {
+                    continue;
+                }
+                occ.occupy(r, x, e);
+                (x..=e).for_each(|c| taken[(r * W + c) as usize] = true);
+            }
+        }
+        for (i, owned) in charts.iter().enumerate() {
+            let chart = owned.as_pack_chart();
+            let prep = prepare_chart(i, &chart).unwrap();
+            let orients = orientations(&chart, &prep, 9.0, 8, 2, [1024, 1024], true);
+            let usable: Vec<bool> = orients.iter().map(|o| o.dilated.is_some()).collect();
+            // Brute force: (score, end, x, k) of every candidate.
+            let mut fits_of = Vec::new();
+            for (k, o) in orients.iter().enumerate().filter(|(k, _)| usable[*k]) {
+                let rows = d_rows(o).unwrap();
+                let (w, h) = (o.width_texels as i32, o.height_texels as i32);
+                let fits = |x: i32, y: i32| {
+                    x >= bbox[0]
+                        && y >= bbox[1]
+                        && x + w <= bbox[2]
+                        && y + h <= bbox[3]
+                        && rows.iter().all(|&(r, a, b)| {
+                            (x + a..=x + b).all(|c| !taken[((y + r) * W + c) as usize])
+                        })
+                };
+                for y in bbox[1]..=bbox[3] - h {
+                    for x in bbox[0]..=bbox[2] - w {
+                        if fits(x, y) && (!fits(x - 1, y) || !fits(x + 1, y)) {
+                            let ring = ring_runs(&rows, h);
+                            fits_of.push((y + h, x, k, occ.contact(bbox, &ring, x, y)));
+                        }
+                    }
+                }
+            }
+            let got = occ.find(bbox, &orients, &usable);
+            let Some(first_end) = fits_of.iter().map(|f| f.0).min() else {
+                assert_eq!(got, None, "chart {i} on canvas {canvas}");
+                continue;
+            };
+            let best = fits_of
+                .iter()
+                .filter(|f| f.0 <= first_end + CANDIDATE_ROWS)
+                .max_by(|a, b| {
+                    let s = |f: &(i32, i32, usize, i64)| 2 * f.3 - i64::from(f.0 - first_end);
+                    s(a).cmp(&s(b)).then((b.0, b.1, b.2).cmp(&(a.0, a.1, a.2)))
+                })
+                .unwrap();
+            let got = got.expect("a fit exists");
+            let h = orients[best.2].height_texels as i32;
+            assert_eq!(
+                (got.orientation, got.x, got.y),
+                (best.2, best.1, best.0 - h),
+                "chart {i} on canvas {canvas}"
+            );
+            placed += 1;
+            not_first += usize::from(best.0 > first_end);
+        }
+    }
+    assert!(
+        placed > 30 && not_first > 0,
+        "{placed} placed, {not_first} below the first fit"
+    );
+}
+
+/// The search order of the runs: the key run, then the others by bit-reversed row
+/// (stable), as a comparison sort would give.
+#[test]
+fn spread_out_is_a_stable_sort_by_bit_reversed_row() {
+    let mut seed = 0x0bad_cafe_1234_5678u64;
+    let mut next = |n: i32| (xorshift64(&mut seed) % n as u64) as i32;
+    for _ in 0..300 {
+        let h = 1 + next(70);
+        let rows: Vec<(i32, i32, i32)> = (0..1 + next(150))
+            .map(|_| (next(h), next(50), next(50)))
+            .collect();
+        let key = next(rows.len() as i32) as usize;
+        let mut expected = vec![rows[key]];
+        let mut rest: Vec<_> = (0..rows.len())
+            .filter(|&i| i != key)
+            .map(|i| rows[i])
+            .collect();
+        rest.sort_by_key(|&(r, _, _)| (r as u32).reverse_bits());
+        expected.extend(rest);
+        assert_eq!(spread_out(&rows, key), expected, "key {key} rows {rows:?}");
+    }
+}
+
+/// The word-by-word contact of a ring agrees with the run-by-run count, on rings of
+/// random sets (wider than a word too) at random positions, inside the box, across its
+/// edges and outside it.
+#[test]
+fn contact_bits_agrees_with_contact() {
+    const W: i32 = 260;
+    const H: i32 = 60;
+    let mut seed = 0xfeed_f00d_2468_1357u64;
+    let mut next = |n: i32| (xorshift64(&mut seed) % n as u64) as i32;
+    let (occ, _) = striped_canvas([W, H], &mut next, [10, 9, 30]);
+    let bbox = [7, 4, 250, 55];
+    let (mut edge, mut occupied) = (0, 0);
+    for _ in 0..400 {
+        let wide = next(3) == 0;
+        let (w, h) = (1 + next(if wide { 150 } else { 20 }), 1 + next(12));
+        let fill = 1 + next(4);
+        let runs: Vec<(i32, i32, i32)> = (0..h)
+            .flat_map(|r| {
+                let mut v = Vec::new();
+                let mut x = next(3);
+                while x < w {
+                    let e = (x + next(2 * fill + 1)).min(w - 1);
+                    v.push((r, x, e));
+                    x = e + 2 + next(4);
+                }
+                v
+            })
+            .collect();
+        let ring = ring_runs(&runs, h);
+        let bits = RingBits::new(&ring);
+        let (x, y) = (next(W + 20) - 10, next(H + 10) - 5);
+        let expected = occ.contact(bbox, &ring, x, y);
+        assert_eq!(
+            occ.contact_bits(bbox, &bits, x, y),
+            expected,
+            "{runs:?} at ({x}, {y})"
+        );
+        edge += usize::from(x <= bbox[0] || x + w >= bbox[2] || y <= bbox[1]);
+        occupied += usize::from(expected > 0);
+    }
+    assert!(edge > 50 && occupied > 200, "{edge} {occupied}");
+}
+
+#[test]
+fn shift_and_matches_a_plain_array() {
+    let mut seed = 0x1234_5678_9abc_def1u64;
+    let mut next = || xorshift64(&mut seed);
+    for n in 1..6usize {
+        for shift in [0usize, 1, 5, 63, 64, 65, 100, 127, 128, 200, 400] {
+            let v: Vec<u64> = (0..n).map(|_| next() | next()).collect();
+            let bit = |v: &[u64], j: usize| j < 64 * v.len() && (v[j / 64] >> (j % 64)) & 1 == 1;
+            let mut w = v.clone();
+            shift_and(&mut w, shift);
+            for j in 0..64 * n {
+                assert_eq!(
+                    bit(&w, j),
+                    bit(&v, j) && bit(&v, j + shift),
+                    "n {n} shift {shift} bit {j}"
+                );
+            }
+        }
+    }
+}
