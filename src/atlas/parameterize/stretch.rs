@@ -410,6 +410,23 @@ pub fn optimize_chart_stretch(
         out.global_steps = 0;
         current = before;
     }
+    // The last test (`clearance`'s module doc; the global descent keeps it at each step, the
+    // vertex passes do not): a moved map whose border parts came closer than the clearance is
+    // not kept.
+    if out.moves + out.global_steps > 0 {
+        if clearance::too_close(
+            st.chart.triangles,
+            &st.segs,
+            uv,
+            Some(&original),
+            clearance::CLEARANCE_RELATIVE * clearance::extent(&original),
+        ) {
+            uv.copy_from_slice(&original);
+            out.moves = 0;
+            out.global_steps = 0;
+            current = before;
+        }
+    }
     out.after = Some(current);
     out
 }
@@ -978,6 +995,7 @@ pub(super) fn boundary_move_ok(
     true
 }
 
+mod clearance;
 mod global;
 mod search;
 use search::{golden_search, parabolic_search, GOLDEN_STEPS, PARABOLA_EVALS};

@@ -22,7 +22,7 @@
 //! step is accepted. Deterministic and sequential.
 //!
 //! Units: UVs in model units; `E` in (model units)⁴ (only its ratios are used).
-use super::{crossing_among, exceeds, sub2, FrameFace, State, FOLD_MARGIN_RAD};
+use super::{clearance, crossing_among, exceeds, sub2, FrameFace, State, FOLD_MARGIN_RAD};
 use crate::numerics::{CsrMatrix, SparseCholesky, Triplet};
 
 /// Steps of the global descent, at most. Trade-off: each costs one gradient, two triangular
@@ -326,6 +326,9 @@ pub(super) fn descend(st: &State<'_>, uv: &mut [[f64; 2]], linf_cap: f64) -> usi
     let mut steps = 0;
     let mut t_prev: Option<f64> = None;
     let mut cand = uv.to_vec();
+    // The border's clearance (`clearance`'s module doc), from the map the descent starts from.
+    let start = uv.to_vec();
+    let clearance = clearance::CLEARANCE_RELATIVE * clearance::extent(&start);
     for _ in 0..GLOBAL_STEPS {
         let gx: Vec<f64> = grad.iter().map(|g| -g[0]).collect();
         let gy: Vec<f64> = grad.iter().map(|g| -g[1]).collect();
@@ -358,6 +361,13 @@ pub(super) fn descend(st: &State<'_>, uv: &mut [[f64; 2]], linf_cap: f64) -> usi
                 if ec.value <= e + ARMIJO * t * slope
                     && ec.linf(st.a3_total) <= linf_cap
                     && boundary_ok(st, &cand)
+                    && !clearance::too_close(
+                        st.chart.triangles,
+                        &st.segs,
+                        &cand,
+                        Some(&start),
+                        clearance,
+                    )
                 {
                     accepted = Some(ec.value);
                     break;
