@@ -20,9 +20,13 @@
 //!   outlier faces decide (it over-splits scanned meshes); the stretch bound is area-weighted,
 //!   measures what the report measures, and bounds the atlas' global L2 stretch by construction.
 //!
-//! Last, with [`ParameterizeOptions::stretch_optimization`] `LinfL2`, every valid chart's map is
-//! optimised for stretch (`optimize_stretch_charts`, `super::stretch`); it keeps every guarantee
-//! above and never raises a chart's L2 or L∞.
+//! With the stretch optimisation on ([`ParameterizeOptions::stretch_optimization`], `Global` by
+//! default), the stretch bounds are tested on the map the optimisation makes: a freshly flattened
+//! chart that fails them first goes through its global descent (`degenerate`'s flattening, via
+//! `stretch::descend_for_bound`) and is tested again, so a chart the descent brings under the
+//! bounds is neither split nor refused as a merge. Last, every valid chart's map is optimised for
+//! stretch (`optimize_stretch_charts`, `super::stretch`); it keeps every guarantee above and never
+//! raises a chart's L2 or L∞.
 //!
 //! Every part is passed through the disk guarantee again, so the result still satisfies the
 //! segmentation contract. A part first tries its parent's map restricted to it
