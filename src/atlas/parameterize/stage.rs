@@ -384,19 +384,7 @@ pub(super) fn optimize_stretch_charts(
                 return (i, None, outcome);
             }
             follow_zero_area_faces(&cm, &zero_area, &mut uv);
-            // Over the faces of positive area, as the parameterizer's (zero-area faces have no
-            // conformal energy: their 1/√d_T weight is infinite).
-            let solid = super::ChartMesh {
-                positions_m: cm.positions_m.clone(),
-                triangles: cm
-                    .triangles
-                    .iter()
-                    .zip(&zero_area)
-                    .filter(|(_, &z)| !z)
-                    .map(|(t, _)| *t)
-                    .collect(),
-            };
-            let energy = conformal_energy(&solid, &uv);
+            let energy = solid_conformal_energy(&cm, &zero_area, &uv);
             (i, Some((uv, energy)), outcome)
         })
         .collect();
@@ -446,6 +434,23 @@ fn follow_zero_area_faces(cm: &super::ChartMesh, zero_area: &[bool], uv: &mut [[
     }
 }
 
+/// The conformal energy of `uv` over the faces of positive area (not `zero_area`), as the
+/// parameterizer measures it: zero-area faces have none (their `1/√d_T` weight is infinite, and
+/// the energy over them is NaN).
+fn solid_conformal_energy(cm: &super::ChartMesh, zero_area: &[bool], uv: &[[f64; 2]]) -> f64 {
+    let solid = super::ChartMesh {
+        positions_m: cm.positions_m.clone(),
+        triangles: cm
+            .triangles
+            .iter()
+            .zip(zero_area)
+            .filter(|(_, &z)| !z)
+            .map(|(t, _)| *t)
+            .collect(),
+    };
+    conformal_energy(&solid, uv)
+}
+
 /// One chart's ASP result: its index, its new UVs and conformal energy when kept, the outcome.
 type AspResult = (usize, Option<(Vec<[f64; 2]>, f64)>, super::AspOutcome);
 
@@ -453,9 +458,10 @@ type AspResult = (usize, Option<(Vec<[f64; 2]>, f64)>, super::AspOutcome);
 /// `options.asp_theta`; charts in parallel, results in chart order (deterministic). A relaxed
 /// map replaces the chart's map only when it passes the stage's tests (`find_defect`: flips,
 /// boundary crossings, folds, and the stretch or area-ratio bound); charts with zero-area faces
-/// (which `find_defect`'s chart validation rejects) are checked against the stretch bound with
-/// `stretch::chart_stretch` instead, and left alone under the area-ratio test. Charts listed in
-/// `v.unresolved` are left alone.
+/// (which `find_defect`'s chart validation rejects) are checked against the L2 and L∞ bounds
+/// with `stretch::chart_stretch` instead, and left alone under the area-ratio test; their
+/// vertices that only zero-area faces use follow those faces (`follow_zero_area_faces`). Charts
+/// listed in `v.unresolved` are left alone.
 pub(super) fn relax_asp_charts(
     mesh: &TriangleMesh,
     v: &mut ParameterizedCharts,
@@ -497,6 +503,7 @@ pub(super) fn relax_asp_charts(
             if !outcome.relaxed {
                 return (i, None, outcome);
             }
+            follow_zero_area_faces(&cm, &zero_area, &mut uv);
             let passes = match cm.validate() {
                 Ok(topology) => {
                     let mut candidate = map.clone();
@@ -506,20 +513,16 @@ pub(super) fn relax_asp_charts(
                 }
                 Err(_) => {
                     options.max_area_ratio.is_none()
-                        && match (
-                            super::stretch::chart_stretch(&chart, &uv),
-                            options.max_stretch,
-                        ) {
-                            (Some((l2, _)), Some(bound)) => l2 <= bound,
-                            (Some(_), None) => true,
-                            (None, _) => false,
-                        }
+                        && super::stretch::chart_stretch(&chart, &uv).is_some_and(|(l2, linf)| {
+                            options.max_stretch.is_none_or(|bound| l2 <= bound)
+                                && options.max_linf.is_none_or(|bound| linf <= bound)
+                        })
                 }
             };
             if !passes {
                 return (i, None, outcome);
             }
-            let energy = conformal_energy(&cm, &uv);
+            let energy = solid_conformal_energy(&cm, &zero_area, &uv);
             (i, Some((uv, energy)), outcome)
         })
         .collect();

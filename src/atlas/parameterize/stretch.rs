@@ -413,19 +413,19 @@ pub fn optimize_chart_stretch(
     // The last test (`clearance`'s module doc; the global descent keeps it at each step, the
     // vertex passes do not): a moved map whose border parts came closer than the clearance is
     // not kept.
-    if out.moves + out.global_steps > 0 {
-        if clearance::too_close(
+    if out.moves + out.global_steps > 0
+        && clearance::too_close(
             st.chart.triangles,
             &st.segs,
             uv,
             Some(&original),
             clearance::CLEARANCE_RELATIVE * clearance::extent(&original),
-        ) {
-            uv.copy_from_slice(&original);
-            out.moves = 0;
-            out.global_steps = 0;
-            current = before;
-        }
+        )
+    {
+        uv.copy_from_slice(&original);
+        out.moves = 0;
+        out.global_steps = 0;
+        current = before;
     }
     out.after = Some(current);
     out

@@ -138,22 +138,17 @@ mod tests {
         let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
         let segs = [(0, 1, 0), (1, 2, 0), (2, 3, 0), (3, 0, 0)];
         assert!(!too_close(&[], &segs, &square, None, 1e-5));
-        // A crack: the border runs 0 -> 1 -> 2 -> 3 -> 4 -> 0 with vertex 3 pressed 1e-9 from
-        // the segment 1 -> 2 (the two sides of a closed crack).
-        let crack = [
-            [0.0, 0.0],
-            [1.0, 0.0],
-            [0.0, 0.5],
-            [0.5, 0.25 + 1e-9],
-            [0.0, 1.0],
-        ];
+        // A bay closed up: the border runs 0 -> 1 -> 2 -> 3 -> 4 -> 0 with vertex 3 pressed
+        // 1e-9 above the segment 0 -> 1 (every other vertex is at least 0.4 from the segments
+        // it is not on).
+        let crack = [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1e-9], [0.0, 1.0]];
         let segs = [(0, 1, 0), (1, 2, 0), (2, 3, 0), (3, 4, 0), (4, 0, 0)];
         assert!(too_close(&[], &segs, &crack, None, 1e-5));
         assert!(!too_close(&[], &segs, &crack, None, 1e-10));
         // Made by the move (the crack was open before): too close; already as close before:
         // not the move's doing.
         let mut open = crack;
-        open[3][1] = 0.3;
+        open[3][1] = 0.5;
         assert!(too_close(&[], &segs, &crack, Some(&open), 1e-5));
         assert!(!too_close(&[], &segs, &crack, Some(&crack), 1e-5));
     }
