@@ -296,30 +296,6 @@ struct State<'a> {
     small_bound: f64,
 }
 
-/// The global descent (`global`) of a freshly flattened chart's map (`cm`, `uv`), for the stage's
-/// stretch bound: the bound is tested on the map the stretch optimisation would make, so that a
-/// chart it can bring under the bound is not split. Returns the descended UVs, or `None` when
-/// the map does not meet the optimiser's preconditions or no step was kept. The same guarantees
-/// as [`optimize_chart_stretch`] (no flip, no boundary crossing or fold, L∞ not raised).
-pub(super) fn descend_for_bound(cm: &ChartMesh, uv: &[[f64; 2]]) -> Option<Vec<[f64; 2]>> {
-    let zero_area: Vec<bool> = cm
-        .triangles
-        .iter()
-        .map(|t| zero_model_area(cm, t))
-        .collect();
-    if zero_area.iter().all(|&z| z) || uv.len() != cm.positions_m.len() {
-        return None;
-    }
-    let chart = StretchChart {
-        positions_m: &cm.positions_m,
-        triangles: &cm.triangles,
-        zero_area: &zero_area,
-    };
-    let mut out = uv.to_vec();
-    let outcome = optimize_chart_stretch(&chart, &mut out, 0);
-    (outcome.global_steps > 0).then_some(out)
-}
-
 /// Optimises `uv` (one per chart vertex, model units) for Sander's stretch: the global descent,
 /// then `passes` passes of each vertex phase (0: the global descent only); see the module doc for
 /// the algorithm and its guarantees. Pure and sequential.
@@ -997,6 +973,7 @@ pub(super) fn boundary_move_ok(
 
 mod clearance;
 mod global;
+pub(super) use global::descend_for_bound;
 mod search;
 use search::{golden_search, parabolic_search, GOLDEN_STEPS, PARABOLA_EVALS};
 #[cfg(test)]

@@ -108,22 +108,10 @@ pub(super) fn too_close(
                     return false;
                 }
                 let d = distance_to_segment(p, uv[a as usize], uv[b as usize]);
-                {
-                    let r = d < clearance
-                        && before.is_none_or(|q| {
-                            d < 0.5
-                                * distance_to_segment(q[v as usize], q[a as usize], q[b as usize])
-                        });
-                    if r && std::env::var("TA_DBG").is_ok() {
-                        let q = before.unwrap();
-                        eprintln!(
-                            "CL v{v} seg {a}-{b} d {d:.3e} d0 {:.3e} clr {clearance:.3e} n {}",
-                            distance_to_segment(q[v as usize], q[a as usize], q[b as usize]),
-                            segs.len()
-                        );
-                    }
-                    r
-                }
+                d < clearance
+                    && before.is_none_or(|q| {
+                        d < 0.5 * distance_to_segment(q[v as usize], q[a as usize], q[b as usize])
+                    })
             })
     })
 }

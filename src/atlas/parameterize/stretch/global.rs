@@ -22,7 +22,10 @@
 //! step is accepted. Deterministic and sequential.
 //!
 //! Units: UVs in model units; `E` in (model units)⁴ (only its ratios are used).
-use super::{clearance, crossing_among, exceeds, sub2, FrameFace, State, FOLD_MARGIN_RAD};
+use super::{
+    clearance, crossing_among, exceeds, optimize_chart_stretch, sub2, zero_model_area, ChartMesh,
+    FrameFace, State, StretchChart, FOLD_MARGIN_RAD,
+};
 use crate::numerics::{CsrMatrix, SparseCholesky, Triplet};
 
 /// Steps of the global descent, at most. Trade-off: each costs one gradient, two triangular
@@ -309,6 +312,33 @@ fn boundary_ok(st: &State<'_>, uv: &[[f64; 2]]) -> bool {
         }
     }
     true
+}
+
+/// The global descent (`global`) of a freshly flattened chart's map (`cm`, `uv`), for the stage's
+/// stretch bound: the bound is tested on the map the stretch optimisation would make, so that a
+/// chart it can bring under the bound is not split. Returns the descended UVs, or `None` when
+/// the map does not meet the optimiser's preconditions or no step was kept. The same guarantees
+/// as `optimize_chart_stretch` (no flip, no boundary crossing or fold, L∞ not raised).
+pub(in crate::atlas::parameterize) fn descend_for_bound(
+    cm: &ChartMesh,
+    uv: &[[f64; 2]],
+) -> Option<Vec<[f64; 2]>> {
+    let zero_area: Vec<bool> = cm
+        .triangles
+        .iter()
+        .map(|t| zero_model_area(cm, t))
+        .collect();
+    if zero_area.iter().all(|&z| z) || uv.len() != cm.positions_m.len() {
+        return None;
+    }
+    let chart = StretchChart {
+        positions_m: &cm.positions_m,
+        triangles: &cm.triangles,
+        zero_area: &zero_area,
+    };
+    let mut out = uv.to_vec();
+    let outcome = optimize_chart_stretch(&chart, &mut out, 0);
+    (outcome.global_steps > 0).then_some(out)
 }
 
 /// Runs the global descent on `uv` (module doc); returns the number of steps kept. `uv` must
