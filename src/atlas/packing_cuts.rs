@@ -6,7 +6,7 @@
 
 use super::error::AtlasError;
 use super::options::AtlasOptions;
-use super::pack::{pack_charts, Packing, TexelDensity};
+use super::pack::{pack_charts, pack_charts_from, PackError, PackOptions, Packing, TexelDensity};
 use super::pack_input::{pack_charts_of, pack_inputs};
 use super::parameterize;
 use super::progress::{Stage, StageProgress};
@@ -57,35 +57,74 @@ pub(super) fn cut_for_packing(
     if options.pack.density != TexelDensity::FitToPage || mesh.num_faces() > PACKING_CUT_MAX_FACES {
         return Ok((validated, 0, None));
     }
+    let page = f64::from(options.pack.width_texels) * f64::from(options.pack.height_texels);
+    // The charts of `v` to pack (not degenerate) and their total 3-D area.
+    let packed_of = |inputs: &super::pack_input::PackInputs| -> (Vec<usize>, f64) {
+        let packed: Vec<usize> = (0..inputs.degenerate.len())
+            .filter(|&i| !inputs.degenerate[i])
+            .collect();
+        let total = packed.iter().map(|&i| inputs.area_m2[i]).sum();
+        (packed, total)
+    };
     // The estimated efficiency of `v`'s packing, its number of packed charts, and the packing
-    // (None above PACKING_CUT_MAX_CHARTS charts, where no cut is tried).
-    let estimate =
-        |v: &parameterize::ParameterizedCharts| -> Result<(f64, usize, Option<Packing>), AtlasError> {
+    // (None above PACKING_CUT_MAX_CHARTS charts, where no cut is tried). The density search
+    // starts at `start` when given.
+    let estimate = |v: &parameterize::ParameterizedCharts,
+                    start: Option<f64>|
+     -> Result<(f64, usize, Option<Packing>), AtlasError> {
+        let inputs = pack_inputs(mesh, v)?;
+        let (packed, total) = packed_of(&inputs);
+        let n = packed.len();
+        if n == 0 || n > PACKING_CUT_MAX_CHARTS {
+            return Ok((1.0, n, None));
+        }
+        let input = pack_charts_of(v, &packed, &inputs.triangles, &inputs.area_m2);
+        let packing = pack_charts_from(
+            &input,
+            &options.pack,
+            start,
+            &mut StageProgress::ignored(Stage::Pack),
+        )?;
+        Ok((
+            total * packing.texels_per_unit.powi(2) / page,
+            n,
+            Some(packing),
+        ))
+    };
+    // The density at which `v`'s charts would pack at efficiency `goal`, when one page holds
+    // them there (one packing at that fixed density, two when the horizons need a second page:
+    // a cheap test before the full search of `estimate`).
+    let fits_at =
+        |v: &parameterize::ParameterizedCharts, goal: f64| -> Result<Option<f64>, AtlasError> {
             let inputs = pack_inputs(mesh, v)?;
-            let packed: Vec<usize> = (0..inputs.degenerate.len())
-                .filter(|&i| !inputs.degenerate[i])
-                .collect();
-            let n = packed.len();
-            if n == 0 || n > PACKING_CUT_MAX_CHARTS {
-                return Ok((1.0, n, None));
+            let (packed, total) = packed_of(&inputs);
+            if packed.is_empty() || !(total > 0.0) {
+                return Ok(None);
             }
+            let density = (goal * page / total).sqrt();
             let input = pack_charts_of(v, &packed, &inputs.triangles, &inputs.area_m2);
-            let packing = pack_charts(
-                &input,
-                &options.pack,
-                &mut StageProgress::ignored(Stage::Pack),
-            )?;
-            let page = f64::from(options.pack.width_texels)
-                * f64::from(options.pack.height_texels)
-                * f64::from(packing.num_pages.max(1));
-            let total: f64 = packed.iter().map(|&i| inputs.area_m2[i]).sum();
-            Ok((
-                total * packing.texels_per_unit.powi(2) / page,
-                n,
-                Some(packing),
-            ))
+            let fixed = PackOptions {
+                density: TexelDensity::TexelsPerUnit(density),
+                ..options.pack
+            };
+            match pack_charts(&input, &fixed, &mut StageProgress::ignored(Stage::Pack)) {
+                Ok(p) if p.num_pages == 1 => Ok(Some(density)),
+                Ok(_) | Err(PackError::ChartTooLarge { .. }) => Ok(None),
+                Err(e) => Err(e.into()),
+            }
         };
-    let (mut best, n, mut best_packing) = estimate(&validated)?;
+    // A candidate's estimate, when it can pay: the full search runs only when the candidate
+    // fits at the efficiency that would keep it.
+    let try_candidate = |v: &parameterize::ParameterizedCharts,
+                         best: f64|
+     -> Result<Option<(f64, Option<Packing>)>, AtlasError> {
+        let Some(density) = fits_at(v, best + PACKING_CUT_MIN_GAIN)? else {
+            return Ok(None);
+        };
+        let (eff, _, packing) = estimate(v, Some(density))?;
+        Ok(Some((eff, packing)))
+    };
+    let (mut best, n, mut best_packing) = estimate(&validated, None)?;
     if n == 0 || n > PACKING_CUT_MAX_CHARTS || best >= PACKING_CUT_BELOW {
         return Ok((validated, 0, best_packing));
     }
@@ -139,8 +178,9 @@ pub(super) fn cut_for_packing(
         };
         tried.push(charts[pick].clone());
         let candidate = cut(&current, &[pick])?;
-        let (eff, _, packing) = estimate(&candidate)?;
-        if eff >= best + PACKING_CUT_MIN_GAIN {
+        if let Some((eff, packing)) =
+            try_candidate(&candidate, best)?.filter(|(eff, _)| *eff >= best + PACKING_CUT_MIN_GAIN)
+        {
             best = eff;
             best_packing = packing;
             cuts += 1;
@@ -167,9 +207,10 @@ pub(super) fn cut_for_packing(
                 break;
             }
             let candidate = cut(base, &picks)?;
-            let (eff, _, packing) = estimate(&candidate)?;
             let cut_now = cut_before + picks.len();
-            if eff >= best + PACKING_CUT_MIN_GAIN {
+            if let Some((_, packing)) = try_candidate(&candidate, best)?
+                .filter(|(eff, _)| *eff >= best + PACKING_CUT_MIN_GAIN)
+            {
                 cuts = cut_now;
                 best_packing = packing;
                 current = candidate;

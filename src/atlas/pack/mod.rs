@@ -175,7 +175,23 @@ pub fn pack_charts(
     options: &PackOptions,
     progress: &mut StageProgress<'_>,
 ) -> Result<Packing, PackError> {
+    pack_charts_from(charts, options, None, progress)
+}
+
+/// [`pack_charts`], with the fit-to-page density search starting at `start_texels_per_unit`
+/// (a density the caller expects to fit, such as one a similar packing reached) instead of
+/// where the charts would cover 60% of the page: fewer trials when the guess is close. Same
+/// contract and guarantees; the density found may differ from [`pack_charts`]'s within the
+/// search's tolerance. Ignored with [`TexelDensity::TexelsPerUnit`] or when not finite and
+/// positive.
+pub fn pack_charts_from(
+    charts: &[PackChart<'_>],
+    options: &PackOptions,
+    start_texels_per_unit: Option<f64>,
+    progress: &mut StageProgress<'_>,
+) -> Result<Packing, PackError> {
     options.check()?;
+    let start = start_texels_per_unit.filter(|d| d.is_finite() && *d > 0.0);
     let monitor = &mut |(done, total): (usize, usize)| progress.advance(done, total);
     // Each chart's density-independent data on its own (in parallel), then the first error in
     // chart order, whatever the thread count.
@@ -209,6 +225,7 @@ pub fn pack_charts(
         scored: false,
     };
     let pack = |ctx: &Context<'_, '_>,
+                start: Option<f64>,
                 monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>|
      -> Result<Trial, PackError> {
         match options.density {
@@ -218,10 +235,10 @@ pub fn pack_charts(
                 progress.finish()?;
                 Ok(t)
             }
-            TexelDensity::FitToPage => fit_to_page(ctx, monitor),
+            TexelDensity::FitToPage => fit_to_page(ctx, start, monitor),
         }
     };
-    let mut trial = pack(&ctx, monitor)?;
+    let mut trial = pack(&ctx, start, monitor)?;
     // Hole filling ([`hole`]) where the horizons leave much of the page empty: fit-to-page
     // below `HOLE_FILL_BELOW`, or a fixed density that needs more than one page. The better
     // packing is kept (higher density, or fewer pages; ties: the horizons').
@@ -242,7 +259,8 @@ pub fn pack_charts(
         ctx.order = &hole_order;
         // The stage's progress stays at its end; the monitor can still cancel.
         let mut at_end = |_: (usize, usize)| monitor((1, 1));
-        match pack(&ctx, &mut at_end) {
+        // Hole filling packs denser than the horizons: its search starts at their density.
+        match pack(&ctx, Some(trial.texels_per_unit), &mut at_end) {
             Ok(t) => {
                 let better = match options.density {
                     TexelDensity::FitToPage => t.texels_per_unit > trial.texels_per_unit,
@@ -663,6 +681,7 @@ fn unit(v: f64) -> f64 {
 /// result is the same either way).
 fn fit_to_page(
     ctx: &Context<'_, '_>,
+    start: Option<f64>,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
 ) -> Result<Trial, PackError> {
     let [w, h] = ctx.page();
@@ -698,8 +717,8 @@ fn fit_to_page(
                 .max(1.0 + FIT_TOLERANCE)
         }
     };
-    // Start where charts would cover 60% of the page.
-    let mut d = clamp_d((0.6 * page_area / total_area).sqrt());
+    // Start at the caller's guess, or where charts would cover 60% of the page.
+    let mut d = clamp_d(start.unwrap_or_else(|| (0.6 * page_area / total_area).sqrt()));
     let mut search = FitSearch {
         probes: if ctx.holes { 0 } else { FIT_PROBES },
         ..FitSearch::default()
