@@ -191,7 +191,10 @@ pub fn pack_charts_from(
     progress: &mut StageProgress<'_>,
 ) -> Result<Packing, PackError> {
     options.check()?;
-    let start = start_texels_per_unit.filter(|d| d.is_finite() && *d > 0.0);
+    let start = match start_texels_per_unit {
+        Some(d) if d.is_finite() && d > 0.0 => FitStart::Guess(d),
+        _ => FitStart::Fill,
+    };
     let monitor = &mut |(done, total): (usize, usize)| progress.advance(done, total);
     // Each chart's density-independent data on its own (in parallel), then the first error in
     // chart order, whatever the thread count.
@@ -225,7 +228,7 @@ pub fn pack_charts_from(
         scored: false,
     };
     let pack = |ctx: &Context<'_, '_>,
-                start: Option<f64>,
+                start: FitStart,
                 monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>|
      -> Result<Trial, PackError> {
         match options.density {
@@ -259,8 +262,9 @@ pub fn pack_charts_from(
         ctx.order = &hole_order;
         // The stage's progress stays at its end; the monitor can still cancel.
         let mut at_end = |_: (usize, usize)| monitor((1, 1));
-        // Hole filling packs denser than the horizons: its search starts at their density.
-        match pack(&ctx, Some(trial.texels_per_unit), &mut at_end) {
+        // Hole filling is kept only when it packs denser than the horizons: its search starts
+        // just above their density and gives up when that does not fit.
+        match pack(&ctx, FitStart::Beat(trial.texels_per_unit), &mut at_end) {
             Ok(t) => {
                 let better = match options.density {
                     TexelDensity::FitToPage => t.texels_per_unit > trial.texels_per_unit,
@@ -681,7 +685,7 @@ fn unit(v: f64) -> f64 {
 /// result is the same either way).
 fn fit_to_page(
     ctx: &Context<'_, '_>,
-    start: Option<f64>,
+    start: FitStart,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
 ) -> Result<Trial, PackError> {
     let [w, h] = ctx.page();
@@ -717,10 +721,18 @@ fn fit_to_page(
                 .max(1.0 + FIT_TOLERANCE)
         }
     };
-    // Start at the caller's guess, or where charts would cover 60% of the page.
-    let mut d = clamp_d(start.unwrap_or_else(|| (0.6 * page_area / total_area).sqrt()));
+    let (mut d, beat) = match start {
+        FitStart::Fill => ((0.6 * page_area / total_area).sqrt(), None),
+        FitStart::Guess(d) => (d, None),
+        FitStart::Beat(b) => {
+            let d = b * (1.0 + FIT_TOLERANCE);
+            (d, Some(d))
+        }
+    };
+    d = clamp_d(d);
     let mut search = FitSearch {
         probes: if ctx.holes { 0 } else { FIT_PROBES },
+        guessed: !matches!(start, FitStart::Fill),
         ..FitSearch::default()
     };
     let mut fit: Option<Trial> = None;
@@ -768,6 +780,10 @@ fn fit_to_page(
             }
         };
         let fitted = t.unplaced == 0;
+        if !fitted && beat.is_some_and(|b| d <= b) {
+            // Nothing above the density to beat fits where it was tried.
+            break;
+        }
         let next = search.next(d, fitted, ratio_of(&t)).map(clamp_d);
         if fitted && fit.as_ref().is_none_or(|f| d > f.texels_per_unit) {
             fit = Some(t);
@@ -783,6 +799,7 @@ fn fit_to_page(
     }
     let t = match fit {
         Some(t) => t,
+        None if beat.is_some() => return Err(does_not_fit()),
         None => {
             // Last resort: a density at which every chart is below a texel.
             let extent = ctx
@@ -821,7 +838,27 @@ struct FitSearch {
     probes: usize,
     probe: usize,
     probe_base: f64,
+    /// The search started at a caller's density ([`FitStart::Guess`], [`FitStart::Beat`]),
+    /// expected to be close: its first growth is [`FIT_GUESS_GROWTH`], not 5%.
+    guessed: bool,
 }
+
+/// Where [`fit_to_page`] starts its search.
+#[derive(Debug, Clone, Copy)]
+enum FitStart {
+    /// Where the charts would cover 60% of the page.
+    Fill,
+    /// A density the caller expects to fit.
+    Guess(f64),
+    /// Only a density above this one is wanted (another packing reached it): the search starts
+    /// [`FIT_TOLERANCE`] above it and gives up when a trial fails there or below.
+    Beat(f64),
+}
+
+/// The first growth of a search that started at a caller's density (expected close to the
+/// largest that fits): a bracket of 1% closes in two bisections, where the usual 5% takes
+/// four. Trade-off: when the guess is far below, one more trial is spent before the 5% steps.
+pub const FIT_GUESS_GROWTH: f64 = 1.01;
 
 impl FitSearch {
     /// Records that density `d` fitted or not (`ratio`: how much the packing would have to
@@ -860,7 +897,14 @@ impl FitSearch {
         // is about linear in density), growing by at least 5% while it fits.
         Some(match (self.lo, self.hi) {
             (Some(l), Some(n)) => (l * n).sqrt(),
-            _ if fitted => d / ratio.min(1.0 / 1.05),
+            _ if fitted => {
+                let growth = if self.guessed && self.steps == 1 {
+                    FIT_GUESS_GROWTH
+                } else {
+                    1.05
+                };
+                d / ratio.min(1.0 / growth)
+            }
             _ => d / ratio,
         })
     }
