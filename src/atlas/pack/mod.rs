@@ -721,18 +721,20 @@ fn fit_to_page(
                 .max(1.0 + FIT_TOLERANCE)
         }
     };
-    let (mut d, beat) = match start {
-        FitStart::Fill => ((0.6 * page_area / total_area).sqrt(), None),
-        FitStart::Guess(d) => (d, None),
+    let fill = (0.6 * page_area / total_area).sqrt();
+    let (d, beat, guessed) = match start {
+        FitStart::Fill => (fill, None, false),
+        FitStart::Guess(d) => (d, None, true),
         FitStart::Beat(b) => {
-            let d = b * (1.0 + FIT_TOLERANCE);
-            (d, Some(d))
+            let above = clamp_d(b * (1.0 + FIT_TOLERANCE));
+            (above.max(fill), Some(above), true)
         }
     };
-    d = clamp_d(d);
+    let mut d = clamp_d(d);
     let mut search = FitSearch {
         probes: if ctx.holes { 0 } else { FIT_PROBES },
-        guessed: !matches!(start, FitStart::Fill),
+        guessed,
+        floor: beat,
         ..FitSearch::default()
     };
     let mut fit: Option<Trial> = None;
@@ -841,6 +843,11 @@ struct FitSearch {
     /// The search started at a caller's density ([`FitStart::Guess`], [`FitStart::Beat`]),
     /// expected to be close: its first growth is [`FIT_GUESS_GROWTH`], not 5%.
     guessed: bool,
+    /// Trials that fitted before the first that did not (each grows the next step).
+    fits_in_a_row: usize,
+    /// [`FitStart::Beat`]'s density just above the one to beat: no step goes below it while
+    /// nothing has fitted (the caller stops when it fails).
+    floor: Option<f64>,
 }
 
 /// Where [`fit_to_page`] starts its search.
@@ -851,7 +858,9 @@ enum FitStart {
     /// A density the caller expects to fit.
     Guess(f64),
     /// Only a density above this one is wanted (another packing reached it): the search starts
-    /// [`FIT_TOLERANCE`] above it and gives up when a trial fails there or below.
+    /// where [`FitStart::Fill`] does, or [`FIT_TOLERANCE`] above this density when that is
+    /// higher; until a trial fits, the steps down stop at that density, and a failure there
+    /// ends the search.
     Beat(f64),
 }
 
@@ -894,23 +903,27 @@ impl FitSearch {
             return Some(probe_density(self));
         }
         // Once bracketed, bisect (log scale); before, step by the fill ratio (a packing's size
-        // is about linear in density), growing by at least 5% while it fits.
+        // is about linear in density), growing by at least 5%, 10%, 20%, 40% while it fits.
         Some(match (self.lo, self.hi) {
             (Some(l), Some(n)) => (l * n).sqrt(),
             _ if fitted => {
+                // Consecutive fits grow by 5%, 10%, 20%, 40% (a caller's guess by 1% first).
+                self.fits_in_a_row += 1;
                 let growth = if self.guessed && self.steps == 1 {
                     FIT_GUESS_GROWTH
                 } else {
-                    1.05
+                    let k = self.fits_in_a_row - usize::from(self.guessed);
+                    1.0 + 0.05 * f64::from(1u32 << k.clamp(1, 4).saturating_sub(1))
                 };
                 d / ratio.min(1.0 / growth)
             }
+            (None, _) if self.floor.is_some() => (d / ratio).max(self.floor?),
             _ => d / ratio,
         })
     }
 
     /// The outcome to bet on for packing ahead: before a bracket, that the trial fits and
-    /// fills the page (the search then grows by 5 %); once bracketed, or while probing, that
+    /// fills the page (the search then grows by its next step); once bracketed, or while probing, that
     /// it does not fit (the usual case on the corpus: most bisection steps and probes fail).
     fn predicted(&self) -> (bool, f64) {
         if self.probe == 0 && self.hi.is_none() {
