@@ -93,9 +93,10 @@ pub const FIT_TOLERANCE: f64 = 3e-3;
 /// `FIT_PROBES` are packed too, upwards until the first that does not fit; the last that fits
 /// wins (never less than the bracket's own result). Not used when the charts are packed again
 /// with hole filling. Trade-off: each probe is one more full packing, for about +0.01 of
-/// packing efficiency on large meshes; stopping at the first failure keeps the cost at one
-/// packing where probes do not fit.
-pub const FIT_PROBES: usize = 3;
+/// packing efficiency on large meshes (the armadillo's probes fitted up to +4%: 0.633 with
+/// 3 probes, 0.645 with 8); stopping at the first failure keeps the cost at one packing where
+/// probes do not fit.
+pub const FIT_PROBES: usize = 8;
 
 /// Charts whose placed UV area is below this many texels² try only the quarter turns of the
 /// diameter-vertical orientation (when `rotations` is a multiple of 4): a subset of the

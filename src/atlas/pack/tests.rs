@@ -480,11 +480,8 @@ fn fit_to_page_probes_keep_the_largest_density_that_fits() {
     let fit = PackOptions::default();
     let (packing, check) = pack(&charts, &fit);
     assert_guarantees(&check, "fit to page");
-    assert!(
-        packing.trials as usize > FIT_PROBES + 1,
-        "{} trials",
-        packing.trials
-    );
+    // At least a fit and a failure to close the bracket, and one probe above it.
+    assert!(packing.trials >= 3, "{} trials", packing.trials);
     let fixed = PackOptions {
         density: TexelDensity::TexelsPerUnit(packing.texels_per_unit),
         ..fit
