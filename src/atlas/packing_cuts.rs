@@ -98,7 +98,7 @@ pub(super) fn cut_for_packing(
         |v: &parameterize::ParameterizedCharts, goal: f64| -> Result<Option<f64>, AtlasError> {
             let inputs = pack_inputs(mesh, v)?;
             let (packed, total) = packed_of(&inputs);
-            if packed.is_empty() || !(total > 0.0) {
+            if packed.is_empty() || total.is_nan() || total <= 0.0 {
                 return Ok(None);
             }
             let density = (goal * page / total).sqrt();
