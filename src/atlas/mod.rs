@@ -58,7 +58,7 @@ use pack_input::{pack_charts_of, pack_inputs, PackInputs};
 use packing_cuts::cut_for_packing;
 use parameterize::{parameterize_charts, ChartDefect};
 use segment::{segment_charts_with, SegmentMethod};
-use uv_guard::{guard_uvs, split_off_faces};
+use uv_guard::{guard_uvs, sampled_folds, split_off_faces};
 
 /// Counters of one [`generate`] run.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -263,11 +263,28 @@ pub fn generate(
         let outcome = guard_uvs(mesh, &mut written.corner_uvs, &written.face_page);
         stats.uv_collapsed_faces += outcome.collapsed_faces;
         stats.uv_nudged_vertices += outcome.nudged_vertices;
-        if outcome.unrepaired.is_empty() || round == GUARD_SPLIT_ROUNDS {
+        let mut faults = outcome.unrepaired;
+        if faults.is_empty() && round < GUARD_SPLIT_ROUNDS {
+            let face_chart: Vec<u32> = parameterized
+                .segmentation
+                .face_chart
+                .iter()
+                .map(|(_, c)| c.index() as u32)
+                .collect();
+            faults = sampled_folds(
+                mesh,
+                &written.corner_uvs,
+                &written.face_page,
+                written.packing.num_pages,
+                [options.pack.width_texels, options.pack.height_texels],
+                &face_chart,
+            );
+        }
+        if faults.is_empty() || round == GUARD_SPLIT_ROUNDS {
             break (written, parameterized.segmentation.charts);
         }
-        stats.uv_guard_splits += outcome.unrepaired.len();
-        parameterized = split_off_faces(mesh, &parameterized, &outcome.unrepaired, options)?;
+        stats.uv_guard_splits += faults.len();
+        parameterized = split_off_faces(mesh, &parameterized, &faults, options)?;
         round += 1;
     };
     let Written {

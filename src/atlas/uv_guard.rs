@@ -27,7 +27,10 @@
 //!    whose UV corners all coincide (a triangle smaller than the `f32` spacing) first has one
 //!    corner moved off the others (along ±u or ±v, the other faces at it staying fine);
 //! 3. what is left is returned, for `generate` to split each such face off into a chart of its
-//!    own and pack again (a single-face chart is never flipped: its orientation is its own).
+//!    own and pack again (a single-face chart is never flipped: its orientation is its own);
+//!    so are the faces that [`sampled_folds`] finds covering a texel centre of another face of
+//!    their chart by the report's own sampling (a sliver thinner than the raster's rounding):
+//!    alone, a face keeps the padding from every other chart.
 //!
 //! # Invariants
 //! Pure and deterministic: faces and vertices are visited in index order; no hashing. Never
@@ -377,6 +380,39 @@ fn nudge(
     let n = [-e[1] / len * sign, e[0] / len * sign];
     let group = vertices.group(3 * f + k);
     first_fine_move(check, group, corner_uvs, (c, n), usize::MAX, |_| true)
+}
+
+/// Faces of one chart that cover a common texel centre by the report's own sampling (the
+/// evaluator's fixed-point raster, `measure::sampled_same_chart_pairs`): of each such pair,
+/// the face of smaller 3-D area (ties: the higher index), ascending, for the caller to split
+/// off (step 3). Validated `f64` maps do not overlap, but a 3-D sliver whose UV height is
+/// below the raster's rounding (craft_speederD: 1e-5 texels) can cross its neighbour there.
+/// `face_chart` is the pipeline's chart of each face; `size = [W, H]` texels.
+pub(super) fn sampled_folds(
+    mesh: &TriangleMesh,
+    corner_uvs: &[[[f32; 2]; 3]],
+    face_page: &[u32],
+    num_pages: u32,
+    size: [u32; 2],
+    face_chart: &[u32],
+) -> Vec<FaceId> {
+    let pairs = super::measure::sampled_same_chart_pairs(
+        corner_uvs, face_page, num_pages, size, face_chart,
+    );
+    let mut faces: Vec<FaceId> = pairs
+        .into_iter()
+        .map(|(a, b)| {
+            let (fa, fb) = (FaceId(a), FaceId(b));
+            if mesh.face_area_m2(fa) < mesh.face_area_m2(fb) {
+                fa
+            } else {
+                fb
+            }
+        })
+        .collect();
+    faces.sort_unstable();
+    faces.dedup();
+    faces
 }
 
 /// `validated` with each face of `faults` (ascending) split off its chart into a chart of its

@@ -461,6 +461,22 @@ fn packing_bound(
     padded_texels / page_texels
 }
 
+/// The face pairs `(a, b)`, `a < b`, that cover a common texel centre by the report's own
+/// sampling (the evaluator's fixed-point raster: its `overlap.pairs_same_chart` when
+/// `chart_of_face` is the report's charts) and lie in one chart of `chart_of_face`, ascending.
+/// `size = [W, H]` texels. For the pipeline's last line of defence (`uv_guard.rs`). Pure and
+/// deterministic; the cost of the report's rasterization.
+pub(crate) fn sampled_same_chart_pairs(
+    corner_uvs: &[[[f32; 2]; 3]],
+    face_page: &[u32],
+    num_pages: u32,
+    size: [u32; 2],
+    chart_of_face: &[u32],
+) -> Vec<(u32, u32)> {
+    raster::rasterize_pages(corner_uvs, face_page, num_pages, size, 0, chart_of_face)
+        .same_chart_pairs
+}
+
 /// Measures the atlas. Pure and deterministic. Panics on the precondition violations listed on
 /// [`MeasureInput`]. Cost: see the module doc.
 pub fn measure_atlas(input: &MeasureInput<'_>) -> AtlasReport {

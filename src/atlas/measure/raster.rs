@@ -36,6 +36,8 @@ pub(super) struct RasterResult {
     pub sampled: SampledOverlap,
     pub padding_violation_texels: u64,
     pub covered_per_page: Vec<u64>,
+    /// The face pairs `(a, b)`, `a < b`, of `sampled.pairs_same_chart`, ascending.
+    pub same_chart_pairs: Vec<(u32, u32)>,
 }
 
 /// A triangle in fixed point, counter-clockwise (positive area).
@@ -118,6 +120,7 @@ pub(super) fn rasterize_pages(
         sampled: SampledOverlap::default(),
         padding_violation_texels: 0,
         covered_per_page: Vec::with_capacity(num_pages as usize),
+        same_chart_pairs: Vec::new(),
     };
     // (global texel, face) samples on multiply covered texels, all pages.
     let mut multi_samples: Vec<(u64, u32)> = Vec::new();
@@ -259,7 +262,7 @@ pub(super) fn rasterize_pages(
     } else {
         0.0
     };
-    sampled_pairs(
+    out.same_chart_pairs = sampled_pairs(
         &mut out.sampled,
         multi_samples,
         chart_of_face,
@@ -268,15 +271,16 @@ pub(super) fn rasterize_pages(
     out
 }
 
-/// Distinct face pairs sharing a multiply covered texel, with the evaluator's candidate budget.
+/// Distinct face pairs sharing a multiply covered texel, with the evaluator's candidate budget;
+/// returns the pairs `(a, b)` within one chart, ascending.
 fn sampled_pairs(
     out: &mut SampledOverlap,
     mut samples: Vec<(u64, u32)>,
     chart_of_face: &[u32],
     max_candidates: u64,
-) {
+) -> Vec<(u32, u32)> {
     if samples.is_empty() {
-        return;
+        return Vec::new();
     }
     samples.sort_unstable();
     // Groups (size, start) of equal texel, then by size ascending, texel order kept.
@@ -321,11 +325,15 @@ fn sampled_pairs(
     keys.sort_unstable();
     keys.dedup();
     out.pairs = keys.len() as u64;
-    out.pairs_same_chart = keys
+    let same_chart: Vec<(u32, u32)> = keys
         .iter()
-        .filter(|&&key| chart_of_face[(key / nf) as usize] == chart_of_face[(key % nf) as usize])
-        .count() as u64;
+        .map(|&key| ((key / nf) as u32, (key % nf) as u32))
+        .filter(|&(a, b)| chart_of_face[a as usize] == chart_of_face[b as usize])
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .collect();
+    out.pairs_same_chart = same_chart.len() as u64;
     out.pairs_cross_chart = out.pairs - out.pairs_same_chart;
+    same_chart
 }
 
 /// Covered single-chart texels with a texel of another chart within Chebyshev distance `p`.
