@@ -453,3 +453,34 @@ pub(super) fn split_off_faces(
         &mut StageProgress::ignored(Stage::Parameterize),
     )?)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::atlas::segment::tests::build;
+    use crate::mesh::MeshInput;
+
+    #[test]
+    fn sampled_folds_picks_the_smaller_face_of_a_fold_and_nothing_elsewhere() {
+        // Two faces sharing the edge (4,0)-(0,4): face 0 of area 8, face 1 of area 4.
+        let mesh = build(&MeshInput::single_group(
+            vec![
+                [0.0, 0.0, 0.0],
+                [4.0, 0.0, 0.0],
+                [0.0, 4.0, 0.0],
+                [5.0, 1.0, 0.0],
+            ],
+            vec![[0, 1, 2], [1, 3, 2]],
+        ));
+        assert!(mesh.face_area_m2(FaceId(1)) < mesh.face_area_m2(FaceId(0)));
+        let face0 = [[0.1f32, 0.1], [0.5, 0.1], [0.1, 0.5]];
+        let folds = |apex: [f32; 2]| {
+            let corner_uvs = [face0, [[0.5, 0.1], apex, [0.1, 0.5]]];
+            sampled_folds(&mesh, &corner_uvs, &[0, 0], 1, [64, 64], &[0, 0])
+        };
+        // Face 1 folded back over face 0: it covers face 0's texel centres.
+        assert_eq!(folds([0.2, 0.2]), vec![FaceId(1)]);
+        // Unfolded, on the other side of the shared edge: nothing.
+        assert!(folds([0.45, 0.45]).is_empty());
+    }
+}
