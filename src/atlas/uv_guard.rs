@@ -30,12 +30,15 @@
 //!    own and pack again (a single-face chart is never flipped: its orientation is its own);
 //!    so are the faces that [`sampled_folds`] finds covering a texel centre of another face of
 //!    their chart by the report's own sampling (a sliver thinner than the raster's rounding):
-//!    alone, a face keeps the padding from every other chart.
+//!    alone, a face keeps the padding from every other chart;
+//! 4. slivers whose UV height the rounding set far from their 3-D height get their apex moved
+//!    back (`slivers.rs`, [`restore_slivers`]): the one step that moves a corner of a face that
+//!    is not flipped or degenerate, and only of faces thinner than 1/16 texel.
 //!
 //! # Invariants
-//! Pure and deterministic: faces and vertices are visited in index order; no hashing. Never
-//! moves a corner of a face that is not at fault or at a nudged vertex, so a valid atlas comes
-//! out bit-identical.
+//! Pure and deterministic: faces and vertices are visited in index order; no hashing. Steps 1–3
+//! never move a corner of a face that is not at fault or at a nudged vertex, so a valid atlas
+//! without slivers comes out bit-identical.
 //!
 //! # Units
 //! UVs in normalized page coordinates (`f32`, as written to the file); `A2` in page units².
@@ -46,6 +49,9 @@
 //! (`measure/mod.rs`, "Degenerate", "Charts", "Flips").
 use super::measure::{orientation_check, OrientationCheck};
 use crate::mesh::{FaceId, TriangleMesh};
+
+mod slivers;
+pub(super) use slivers::restore_slivers;
 
 /// The largest nudge, in `f32` spacings at the vertex (2⁸: see the module doc).
 pub(super) const NUDGE_MAX_ULPS: u32 = 256;
