@@ -136,9 +136,11 @@ pub struct PipelineJson {
     /// The flip promise's last line of defence: 3-D-degenerate faces whose written UV triangle
     /// had area and was collapsed to a segment.
     pub uv_collapsed_faces: usize,
-    /// ... UV vertices moved by a few `f32` spacings to unflip a face with 3-D area.
+    /// ... UV vertices moved by a few `f32` spacings to unflip a face with 3-D area, or to give a
+    /// sliver back the UV height rounding took from it.
     pub uv_nudged_vertices: usize,
-    /// ... faces split off into a chart of their own, then packed again.
+    /// ... faces split off into a chart of their own, then packed again (no nudge repaired
+    /// them, or they covered a texel centre of another face of their chart).
     pub uv_guard_splits: usize,
 }
 
