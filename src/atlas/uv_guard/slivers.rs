@@ -85,6 +85,14 @@ pub(in crate::atlas) fn restore_slivers(
         let group = vertices
             .get_or_insert_with(|| UvVertices::new(mesh, corner_uvs, face_page))
             .group(3 * f + apex);
+        // A 3-D-degenerate face at the vertex was collapsed to a segment by a corner of its
+        // own (another key): moving this one would give it area again.
+        if group
+            .iter()
+            .any(|&corner| check.degenerate_3d[corner as usize / 3])
+        {
+            continue;
+        }
         let local_max = |corner_uvs: &[[[f32; 2]; 3]], at: [f32; 2]| -> f64 {
             group
                 .iter()
