@@ -385,7 +385,12 @@ fn run_bench(
         let mut row = run_ours(file, &ours_out, config);
         row.file = name.clone();
         if (config.eval || config.peers) && row.error.is_none() {
-            row.eval = run_eval(&ours_out, config).ok();
+            // The atlas's UV set (TEXCOORD_1 where the input had a TEXCOORD_0 of its own).
+            let uv = row
+                .uv_sets
+                .as_deref()
+                .and_then(|sets| sets.first().copied());
+            row.eval = run_eval(&ours_out, uv, config).ok();
         }
         let triangles = row.triangles;
         on_row(&row);
@@ -416,7 +421,7 @@ fn run_bench(
                     row.triangles = triangles;
                 }
                 if row.error.is_none() {
-                    match run_eval(&out, config) {
+                    match run_eval(&out, None, config) {
                         Ok(q) => row.eval = Some(q),
                         Err(e) => row.error = Some(format!("evaluator: {e:#}")),
                     }
@@ -526,22 +531,26 @@ fn run_peer(tool: &str, file: &Path, out: &Path, config: &BenchConfig) -> Pipeli
     row
 }
 
-fn run_eval(out: &Path, config: &BenchConfig) -> anyhow::Result<Quality> {
+/// The evaluator's quality of `out`, its atlas in TEXCOORD_`uv` (0 when `None`).
+fn run_eval(out: &Path, uv: Option<u64>, config: &BenchConfig) -> anyhow::Result<Quality> {
     let v = evaluator_json(
         &config.eval_dir,
         out,
         None,
+        uv,
         config.resolution,
         config.padding,
     )?;
     Quality::from_eval(&v).context("the evaluator's JSON lacks a quality key")
 }
 
-/// `atlas_eval.py GLB [--input INPUT] --resolution R --padding P --json` of `eval_dir`, parsed.
+/// `atlas_eval.py GLB [--input INPUT] [--uv K] --resolution R --padding P --json` of
+/// `eval_dir`, parsed.
 fn evaluator_json(
     eval_dir: &Path,
     glb: &Path,
     input: Option<&Path>,
+    uv: Option<u64>,
     resolution: u32,
     padding: u32,
 ) -> anyhow::Result<serde_json::Value> {
@@ -549,6 +558,9 @@ fn evaluator_json(
     cmd.arg(eval_dir.join("atlas_eval.py")).arg(glb);
     if let Some(input) = input {
         cmd.arg("--input").arg(input);
+    }
+    if let Some(uv) = uv {
+        cmd.args(["--uv", &uv.to_string()]);
     }
     let o = cmd
         .args(["--resolution", &resolution.to_string()])

@@ -260,6 +260,7 @@ fn run_eval(glb: &Path, input: &Path, config: &PackPeersConfig) -> anyhow::Resul
         &config.eval_dir,
         glb,
         Some(input),
+        None,
         config.resolution,
         config.padding,
     )?;
