@@ -113,16 +113,17 @@ pub(super) fn cut_for_packing(
                 Err(e) => Err(e.into()),
             }
         };
-    // A candidate's estimate, when it can pay: the full search runs only when the candidate
-    // fits at the efficiency that would keep it.
+    // A candidate's efficiency and packing when they beat `best` by `PACKING_CUT_MIN_GAIN`: the
+    // full search runs only when the candidate fits at the efficiency that would keep it.
     let try_candidate = |v: &parameterize::ParameterizedCharts,
                          best: f64|
      -> Result<Option<(f64, Option<Packing>)>, AtlasError> {
-        let Some(density) = fits_at(v, best + PACKING_CUT_MIN_GAIN)? else {
+        let goal = best + PACKING_CUT_MIN_GAIN;
+        let Some(density) = fits_at(v, goal)? else {
             return Ok(None);
         };
         let (eff, _, packing) = estimate(v, Some(density))?;
-        Ok(Some((eff, packing)))
+        Ok((eff >= goal).then_some((eff, packing)))
     };
     let (mut best, n, mut best_packing) = estimate(&validated, None)?;
     if n == 0 || n > PACKING_CUT_MAX_CHARTS || best >= PACKING_CUT_BELOW {
@@ -178,9 +179,7 @@ pub(super) fn cut_for_packing(
         };
         tried.push(charts[pick].clone());
         let candidate = cut(&current, &[pick])?;
-        if let Some((eff, packing)) =
-            try_candidate(&candidate, best)?.filter(|(eff, _)| *eff >= best + PACKING_CUT_MIN_GAIN)
-        {
+        if let Some((eff, packing)) = try_candidate(&candidate, best)? {
             best = eff;
             best_packing = packing;
             cuts += 1;
@@ -208,9 +207,7 @@ pub(super) fn cut_for_packing(
             }
             let candidate = cut(base, &picks)?;
             let cut_now = cut_before + picks.len();
-            if let Some((_, packing)) = try_candidate(&candidate, best)?
-                .filter(|(eff, _)| *eff >= best + PACKING_CUT_MIN_GAIN)
-            {
+            if let Some((_, packing)) = try_candidate(&candidate, best)? {
                 cuts = cut_now;
                 best_packing = packing;
                 current = candidate;

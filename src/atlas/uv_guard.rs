@@ -327,13 +327,15 @@ fn separate(
         .any(|dir| first_fine_move(check, group, corner_uvs, (c, dir), f, off_the_others))
 }
 
+/// The `f32` spacing at `x`: the distance from `|x|` to the next larger `f32`.
+fn f32_spacing(x: f32) -> f64 {
+    let x = x.abs().max(f32::MIN_POSITIVE);
+    f64::from(f32::from_bits(x.to_bits() + 1) - x)
+}
+
 /// `c` moved by `steps` `f32` spacings (the larger of its two coordinates') along `dir`.
 fn step(c: [f32; 2], dir: [f64; 2], steps: u32) -> [f32; 2] {
-    let spacing = |x: f32| -> f64 {
-        let x = x.abs().max(f32::MIN_POSITIVE);
-        f64::from(f32::from_bits(x.to_bits() + 1) - x)
-    };
-    let d = spacing(c[0]).max(spacing(c[1])) * f64::from(steps);
+    let d = f32_spacing(c[0]).max(f32_spacing(c[1])) * f64::from(steps);
     [
         (f64::from(c[0]) + d * dir[0]) as f32,
         (f64::from(c[1]) + d * dir[1]) as f32,

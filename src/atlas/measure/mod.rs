@@ -132,6 +132,7 @@ mod numpy;
 mod overlap;
 mod raster;
 mod stretch;
+pub(crate) use stretch::face_metric;
 #[cfg(test)]
 mod tests;
 

@@ -37,6 +37,41 @@ pub(super) struct StretchResult {
     pub per_chart: Vec<ChartStretch>,
 }
 
+/// One used face's metric: `a, b, c` (the metric tensor of the map from texture to surface,
+/// scaled by `k`) and its singular values Γ (`big`) and γ (`small`).
+pub(crate) struct FaceMetric {
+    pub a: f64,
+    pub b: f64,
+    pub c: f64,
+    pub big: f64,
+    pub small: f64,
+}
+
+/// The report's [`FaceMetric`] of a face with 3-D corners `p` and UV corners `uv`; `two_a2` is
+/// twice its signed UV area (non-zero), `k` the atlas's `Σ|A2| / ΣA3`. The one definition of
+/// the report's per-face stretch (the pipeline's last line of defence reads it too).
+pub(crate) fn face_metric(p: [[f64; 3]; 3], uv: &[[f32; 2]; 3], two_a2: f64, k: f64) -> FaceMetric {
+    let e1 = sub(p[1], p[0]);
+    let e2 = sub(p[2], p[0]);
+    let [s0, t0] = uv64(uv[0]);
+    let [s1, t1] = uv64(uv[1]);
+    let [s2, t2] = uv64(uv[2]);
+    let (ds1, dt1, ds2, dt2) = (s1 - s0, t1 - t0, s2 - s0, t2 - t0);
+    let ss: [f64; 3] = std::array::from_fn(|i| (e1[i] * dt2 - e2[i] * dt1) / two_a2);
+    let st: [f64; 3] = std::array::from_fn(|i| (-e1[i] * ds2 + e2[i] * ds1) / two_a2);
+    let a = dot3_einsum(ss, ss) * k;
+    let b = dot3_einsum(ss, st) * k;
+    let c = dot3_einsum(st, st) * k;
+    let root = ((a - c) * (a - c) + 4.0 * b * b).sqrt();
+    FaceMetric {
+        a,
+        b,
+        c,
+        big: (0.5 * ((a + c) + root)).sqrt(),
+        small: (0.5 * ((a + c) - root)).max(0.0).sqrt(),
+    }
+}
+
 /// The stretch, distortion and density figures. `page_texels_area` = `W · H`.
 pub(super) fn stretch(
     mesh: &TriangleMesh,
@@ -95,24 +130,15 @@ pub(super) fn stretch(
     let mut chart_linf = vec![f64::NEG_INFINITY; num_charts];
     for f in (0..nf).filter(|&f| used[f]) {
         let p = mesh.face_positions(FaceId(f as u32));
-        let e1 = sub(p[1], p[0]);
-        let e2 = sub(p[2], p[0]);
-        let uv = &corner_uvs[f];
-        let [s0, t0] = uv64(uv[0]);
-        let [s1, t1] = uv64(uv[1]);
-        let [s2, t2] = uv64(uv[2]);
-        let (ds1, dt1, ds2, dt2) = (s1 - s0, t1 - t0, s2 - s0, t2 - t0);
         let a2 = geo.signed_uv_area[f];
         let a3 = geo.area_3d_m2[f];
-        let two_a2 = 2.0 * a2;
-        let ss: [f64; 3] = std::array::from_fn(|i| (e1[i] * dt2 - e2[i] * dt1) / two_a2);
-        let st: [f64; 3] = std::array::from_fn(|i| (-e1[i] * ds2 + e2[i] * ds1) / two_a2);
-        let a = dot3_einsum(ss, ss) * k;
-        let b = dot3_einsum(ss, st) * k;
-        let c = dot3_einsum(st, st) * k;
-        let root = ((a - c) * (a - c) + 4.0 * b * b).sqrt();
-        let big = (0.5 * ((a + c) + root)).sqrt();
-        let small = (0.5 * ((a + c) - root)).max(0.0).sqrt();
+        let FaceMetric {
+            a,
+            b,
+            c,
+            big,
+            small,
+        } = face_metric(p, &corner_uvs[f], 2.0 * a2, k);
         let inv_small = if small > 0.0 {
             1.0 / small
         } else {

@@ -11,8 +11,8 @@
 //! non-degenerate and oriented as its chart (`moves_fine`). A move of at most 16 spacings is
 //! far below a texel, inside the padding. Deterministic: faces in index order, points in a
 //! fixed order, strict improvement.
-use super::{moves_fine, UvVertices};
-use crate::atlas::measure::{orientation_check, OrientationCheck};
+use super::{f32_spacing, moves_fine, UvVertices};
+use crate::atlas::measure::{face_metric, orientation_check, OrientationCheck};
 use crate::mesh::{FaceId, TriangleMesh};
 
 /// A face whose UV height (over its longest UV edge) is below this many texels has its shape
@@ -28,28 +28,18 @@ pub(in crate::atlas) const SLIVER_LINF_OK: f64 = 2.0;
 /// cost paid only on slivers.
 const APEX_SEARCH_ULPS: i32 = 16;
 
-/// The report's per-face L∞ of face `f` with UV `uv`: max(Γ, 1/γ) of the map from UV to 3-D,
-/// scaled by `k` (the atlas's UV area over 3-D area); infinite for a UV-degenerate face.
+/// The report's per-face L∞ (`measure::face_metric`: max(Γ, 1/γ)) of face `f` with UV `uv`,
+/// at scale `k` (the atlas's UV area over 3-D area); infinite for a UV-degenerate face.
 fn face_linf(mesh: &TriangleMesh, f: usize, uv: &[[f32; 2]; 3], k: f64) -> f64 {
-    let p = mesh.face_positions(FaceId(f as u32));
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let (e1, e2) = (sub(p[1], p[0]), sub(p[2], p[0]));
     let w = uv.map(|c| c.map(f64::from));
-    let (ds1, dt1) = (w[1][0] - w[0][0], w[1][1] - w[0][1]);
-    let (ds2, dt2) = (w[2][0] - w[0][0], w[2][1] - w[0][1]);
-    let two_a2 = ds1 * dt2 - ds2 * dt1;
+    let two_a2 =
+        (w[1][0] - w[0][0]) * (w[2][1] - w[0][1]) - (w[2][0] - w[0][0]) * (w[1][1] - w[0][1]);
     if two_a2 == 0.0 || !two_a2.is_finite() {
         return f64::INFINITY;
     }
-    let ss: [f64; 3] = std::array::from_fn(|i| (e1[i] * dt2 - e2[i] * dt1) / two_a2);
-    let st: [f64; 3] = std::array::from_fn(|i| (-e1[i] * ds2 + e2[i] * ds1) / two_a2);
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let (a, b, c) = (dot(ss, ss) * k, dot(ss, st) * k, dot(st, st) * k);
-    let root = ((a - c) * (a - c) + 4.0 * b * b).sqrt();
-    let big = (0.5 * ((a + c) + root)).sqrt();
-    let small = (0.5 * ((a + c) - root)).max(0.0).sqrt();
-    if small > 0.0 {
-        big.max(1.0 / small)
+    let m = face_metric(mesh.face_positions(FaceId(f as u32)), uv, two_a2, k);
+    if m.small > 0.0 {
+        m.big.max(1.0 / m.small)
     } else {
         f64::INFINITY
     }
@@ -110,11 +100,7 @@ pub(in crate::atlas) fn restore_slivers(
         // The f32 points within APEX_SEARCH_ULPS spacings of the apex on each axis: the height
         // the 3-D shape asks for is often a fraction of a spacing, which a step along one axis
         // cannot make but a step along both can approach (the base is not axis-aligned).
-        let spacing = |x: f32| -> f64 {
-            let x = x.abs().max(f32::MIN_POSITIVE);
-            f64::from(f32::from_bits(x.to_bits() + 1) - x)
-        };
-        let (su, sv) = (spacing(c[0]), spacing(c[1]));
+        let (su, sv) = (f32_spacing(c[0]), f32_spacing(c[1]));
         let r = APEX_SEARCH_ULPS;
         let mut best: Option<(f64, [f32; 2])> = None;
         for i in -r..=r {
