@@ -10,16 +10,24 @@
 //! outline touches most: an extension of the papers' packers (they have nothing of the
 //! kind). The caller updates the four horizons with the new `F` as for any placement.
 //!
-//! Model. [`Occupancy`] keeps, per canvas row, the texels of every placed `F` twice: as its
-//! first and last occupied column with the sorted free runs in between (for the longest free
-//! run of a row), and as a bitmap (exact: every texel of `F`, not a hull). A chart is tested
-//! by the runs of its `D` (exact: the texels of `D` row by row, so that a concave chart can
-//! wrap around placed ones; the per-row extents, a superset, in the plain first fit of
-//! [`Occupancy::first_fit_only`]): at grid origin `(x, y)` it fits when, for every run
-//! `[a, b]` of row `r`, the canvas texels `x + a ..= x + b` of row `y + r` are free, and the
-//! grid lies inside the box. Exact on the texel grid: then `D` meets no `F`, so every `F`
-//! keeps `padding` empty texels (Chebyshev) from every other `F`; and the box lies within the
-//! page.
+//! Model. [`Occupancy`] keeps, per canvas row, the first and last occupied column with the
+//! sorted free runs in between (and the runs of at least [`LONG_RUNS`] texels apart, for the
+//! longest free run of a row and for long chart rows), and the placed `F` as a bitmap (for
+//! the contact score). What the rows hold depends on the search:
+//! - **Scored** (the default): the union of the placed `D` (each `F` grown by the padding,
+//!   the *keep-out zones*), tested by the runs of the new chart's `F` (exact: the texels of
+//!   `F` row by row, so that a concave chart can wrap around placed ones). `F` meets no placed
+//!   `D` exactly when the new `D` meets no placed `F` (Chebyshev distance is symmetric, and
+//!   `D` is `F` grown by the padding, never cut by its grid, see `place::orientation`). The
+//!   keep-out zones close the thin gaps between placed charts, so rows hold far fewer and
+//!   shorter free runs than the placed `F` leave.
+//! - **Plain first fit** ([`Occupancy::first_fit_only`]): the placed `F`, tested by the per-row
+//!   extents of the new chart's `D` (a superset of its texels).
+//!
+//! At grid origin `(x, y)` a chart fits when, for every run `[a, b]` of its row `r`, the
+//! canvas texels `x + a ..= x + b` of row `y + r` are free, and the grid lies inside the box.
+//! Exact on the texel grid: then every `F` keeps `padding` empty texels (Chebyshev) from
+//! every other `F`; and the box lies within the page.
 //!
 //! Search: per orientation, rows of the box top to bottom, every position of a row at once.
 //! Let `E` be the least grid end (`y + height`) of any orientation's first fit; the
@@ -32,14 +40,11 @@
 //! ones to charts that need them. Deterministic, and exhaustive (every position of the
 //! searched rows is decided). [`Occupancy::first_fit_only`] is the plain first fit: the least
 //! `(y + height, x, orientation)`. A canvas row is skipped at once when one of the chart's
-//! runs is longer than its longest free run. Along a row all positions are tested at once, 64
-//! per word: each run `[a, b]` of `D` (the longest first, then the others spread out) keeps
-//! only the positions where it lies inside one free run `[s, e]` of its canvas row — the
-//! positions `s − a ..= e − b`, read from the row's sorted free runs, so a run costs the
-//! words still alive plus the free runs they meet; where a canvas row is cut into many short
-//! free runs (pages of thousands of charts) its free bits eroded by the run's length with
-//! log-step shifts are cheaper and give the same bits — until none is left or every run is
-//! done.
+//! runs is longer than its longest free run. Along a row the fitting positions are kept as
+//! sorted intervals: each run `[a, b]` of the chart (the longest first, then the others
+//! spread out) keeps only the positions where it lies inside one free run `[s, e]` of its
+//! canvas row at least as long — the positions `s − a ..= e − b` — until none is left or
+//! every run is done.
 //! The orientations are searched in parallel, sharing the least first-fit end found so far
 //! as a bound (never below `E`, so every search still collects every candidate within
 //! [`CANDIDATE_ROWS`] of `E`): the same placement whatever the thread count. Only the
@@ -48,12 +53,11 @@
 //!
 //! Units: texels (`i32` canvas coordinates).
 //!
-//! Cost per orientation: O(box rows × runs of `D`) for the row filter at worst, plus per
-//! surviving row O(runs × (box width / 64 + free runs of the canvas row)) word operations
-//! (fewer: only the words between the first and last position still possible are worked on,
-//! and the row stops when none is left), for the rows down to its first fit and
-//! [`CANDIDATE_ROWS`] more; per candidate O(ring runs × run length / 64); per commit,
-//! O(runs of `F` × free runs of the rows it covers + texels of `F` / 64). Trade-off: the
+//! Cost per orientation: O(box rows × runs of the chart) for the row filter at worst, plus
+//! per surviving row O(intervals left × log free runs + long enough free runs met) per chart
+//! run, for the rows down to its first fit and [`CANDIDATE_ROWS`] more (the row stops when no
+//! position is left); per candidate O(ring runs × run length / 64); per commit, O(runs of
+//! `D` × free runs of the rows it covers + texels of `F` / 64). Trade-off: the
 //! exhaustive search costs more than a first fit by bisection, but finds fits a bisection
 //! misses; the contact score (`2 · contact − rows below the highest first fit`) packs tighter
 //! than the first fit alone for the price of scoring the candidates near it.
@@ -70,7 +74,15 @@ struct Row {
     inner: Vec<(i32, i32)>,
     /// The length of the longest run of `inner` (0 if none).
     inner_max: i32,
+    /// The runs of `inner` at least [`LONG_RUNS`]`[k]` long, for each `k`, in order: a chart
+    /// row that long skips the shorter free runs of the row at once.
+    long: [Vec<(i32, i32)>; 2],
 }
+
+/// The lengths from which [`Row::long`] keeps a free run. Trade-off: each level costs a copy
+/// of the row's long runs per change of the row; rows of pages with thousands of charts hold
+/// hundreds of free runs, most of them a few texels long.
+const LONG_RUNS: [i32; 2] = [8, 32];
 
 impl Row {
     fn empty() -> Self {
@@ -79,16 +91,26 @@ impl Row {
             last: i32::MIN,
             inner: Vec::new(),
             inner_max: 0,
+            long: [Vec::new(), Vec::new()],
         }
     }
 
-    /// Marks columns `s..=e` occupied.
-    fn occupy(&mut self, s: i32, e: i32) {
+    /// Marks columns `s..=e` occupied (some may be already); returns how many were free.
+    fn occupy(&mut self, s: i32, e: i32) -> i64 {
         if self.first > self.last {
             self.first = s;
             self.last = e;
-            return;
+            return i64::from(e - s) + 1;
         }
+        // Free before: the columns outside the span, and the inner runs met.
+        let overlap = |a: i32, b: i32| i64::from((b.min(e) - a.max(s) + 1).max(0));
+        let mut newly = overlap(i32::MIN, self.first - 1) + overlap(self.last + 1, i32::MAX);
+        let lo = self.inner.partition_point(|g| g.1 < s);
+        newly += self.inner[lo..]
+            .iter()
+            .take_while(|g| g.0 <= e)
+            .map(|g| overlap(g.0, g.1))
+            .sum::<i64>();
         // The free space between the run and the current span becomes an inner run.
         if e + 1 < self.first {
             self.inner.insert(0, (e + 1, self.first - 1));
@@ -116,37 +138,76 @@ impl Row {
             self.inner.splice(lo..hi, rest[..n].iter().copied());
         }
         self.inner_max = self.inner.iter().map(|g| g.1 - g.0 + 1).max().unwrap_or(0);
+        for (list, &min) in self.long.iter_mut().zip(&LONG_RUNS) {
+            list.clear();
+            list.extend(self.inner.iter().filter(|g| g.1 - g.0 + 1 >= min));
+        }
+        newly
     }
 
-    /// Calls `f(s, e)` for every maximal free run `s..=e` of the columns `0..=end` (`end` at or
-    /// past the last occupied column) that meets columns `lo..=hi`, left to right. Cost:
-    /// O(log runs + runs met).
-    fn free_runs(&self, lo: i64, hi: i64, end: i64, mut f: impl FnMut(i64, i64)) {
-        let mut emit = |s: i64, e: i64| {
-            if s <= e && e >= lo && s <= hi {
-                f(s, e);
+    /// The positions `x` among `cands` (sorted, disjoint, inclusive intervals) at which the
+    /// columns `x + a ..= x + b` are free in this row, as sorted disjoint intervals appended
+    /// to `out`: for every free run `[s, e]` of the columns `0..=end` (`end` at or past the
+    /// last occupied column) at least `b − a + 1` long, the positions `s − a ..= e − b`, cut to
+    /// `cands`. Cost: O(cands × log runs + long enough runs met), the runs taken from the
+    /// shortest list of [`Self::long`] that holds every run long enough.
+    fn fitting_positions(
+        &self,
+        a: i32,
+        b: i32,
+        end: i32,
+        cands: &[(i32, i32)],
+        out: &mut Vec<(i32, i32)>,
+    ) {
+        let len = b - a + 1;
+        let mut emit = |s: i32, e: i32, p: i32, q: i32| {
+            let (lo, hi) = ((s - a).max(p), (e - b).min(q));
+            if lo <= hi {
+                out.push((lo, hi));
             }
         };
         if self.first > self.last {
-            emit(0, end);
+            for &(p, q) in cands {
+                emit(0, end, p, q);
+            }
             return;
         }
-        emit(0, i64::from(self.first) - 1);
-        let k = self.inner.partition_point(|g| i64::from(g.1) < lo);
-        for &(s, e) in &self.inner[k..] {
-            if i64::from(s) > hi {
-                break;
+        let list: &[(i32, i32)] = match LONG_RUNS.iter().rposition(|&m| m <= len) {
+            Some(k) => &self.long[k],
+            None => &self.inner,
+        };
+        let use_inner = len <= self.inner_max;
+        let mut k = 0;
+        for &(p, q) in cands {
+            // Runs [s, e] whose positions meet p..=q: s ≤ q + a and e ≥ p + b.
+            if self.first >= len {
+                emit(0, self.first - 1, p, q);
             }
-            emit(i64::from(s), i64::from(e));
+            if use_inner {
+                // The first run from k on ending at or after p + b: galloping (it is usually
+                // near k), then bisection.
+                let target = p + b;
+                let (mut lo, mut hi, mut step) = (k, k, 1);
+                while hi < list.len() && list[hi].1 < target {
+                    lo = hi + 1;
+                    hi += step;
+                    step *= 2;
+                }
+                let hi = hi.min(list.len());
+                k = lo + list[lo..hi].partition_point(|g| g.1 < target);
+                for &(s, e) in &list[k..] {
+                    if s > q + a {
+                        break;
+                    }
+                    if e - s + 1 >= len {
+                        emit(s, e, p, q);
+                    }
+                }
+            }
+            if end - self.last >= len {
+                emit(self.last + 1, end, p, q);
+            }
         }
-        emit(i64::from(self.last) + 1, end);
-    }
-
-    /// How many inner free runs meet columns `lo..=hi` (the outer two not counted). O(log runs).
-    fn free_runs_met(&self, lo: i64, hi: i64) -> usize {
-        let k0 = self.inner.partition_point(|g| i64::from(g.1) < lo);
-        let k1 = self.inner.partition_point(|g| i64::from(g.0) <= hi);
-        k1.saturating_sub(k0)
     }
 
     /// Longest free run within columns `x0..x1`, which hold every occupied texel of the row.
@@ -169,27 +230,31 @@ impl Row {
     }
 }
 
-/// The placed footprints `F` of one page, per canvas row.
+/// The placed charts of one page: per canvas row, the texels that the searched runs must
+/// avoid (the placed footprints `F`, or with the contact score their keep-out zones `D`), and
+/// the placed `F` as a bitmap (the contact score).
 #[derive(Debug, Clone)]
 pub struct Occupancy {
+    /// The placed `F` ([`Self::first_fit_only`]: searched with the runs of the new chart's
+    /// `D`), or the union of the placed `D` (scored: searched with the runs of its `F`).
     rows: Vec<Row>,
-    /// The same texels as a bitmap, `words_per_row` words per canvas row (bit `x % 64` of
+    /// The placed `F` as a bitmap, `words_per_row` words per canvas row (bit `x % 64` of
     /// word `x / 64` is column `x`).
     bits: Vec<u64>,
     words_per_row: usize,
-    /// Texels occupied in all (footprints never overlap, so each is counted once).
+    /// Texels occupied in `rows` in all (each counted once).
     occupied_texels: i64,
     /// Whether [`Self::find`] scores candidates (the default) or takes the plain first fit
     /// ([`Self::first_fit_only`]).
     scored: bool,
 }
 
-/// Scratch buffers of [`Occupancy::scan_row`]: the positions that fit every chart row so far,
-/// and one chart row's eroded free bits.
+/// Scratch buffers of [`Occupancy::scan_row`]: the positions that fit every chart row so far
+/// (sorted, disjoint, inclusive intervals), and those that also fit the next chart row.
 #[derive(Debug, Default)]
 struct ScanBuffers {
-    fit: Vec<u64>,
-    window: Vec<u64>,
+    fit: Vec<(i32, i32)>,
+    next: Vec<(i32, i32)>,
 }
 
 impl Occupancy {
@@ -214,40 +279,31 @@ impl Occupancy {
         self
     }
 
-    /// Marks texels `x0..=x1` of row `y` occupied (inside the canvas, `x0 <= x1`).
+    /// Whether the placed charts' keep-out zones are marked too ([`Self::keep_out`]): the
+    /// scored search tests the runs of a chart's `F` against them.
+    pub fn keeps_out(&self) -> bool {
+        self.scored
+    }
+
+    /// Marks texels `x0..=x1` of row `y` as part of a placed keep-out zone `D` (with
+    /// [`Self::keeps_out`]; inside the canvas, `x0 <= x1`; zones may overlap). A texel where
+    /// no new `F` may go: within `padding` (Chebyshev) of a placed `F`.
+    pub fn keep_out(&mut self, y: i32, x0: i32, x1: i32) {
+        self.occupied_texels += self.rows[y as usize].occupy(x0, x1);
+    }
+
+    /// Marks texels `x0..=x1` of row `y` as part of a placed footprint `F` (inside the canvas,
+    /// `x0 <= x1`, not marked before).
     pub fn occupy(&mut self, y: i32, x0: i32, x1: i32) {
-        self.occupied_texels += i64::from(x1 - x0) + 1;
-        self.rows[y as usize].occupy(x0, x1);
+        if !self.scored {
+            self.occupied_texels += self.rows[y as usize].occupy(x0, x1);
+        }
         let row = &mut self.bits[y as usize * self.words_per_row..][..self.words_per_row];
         let (x0, x1) = (x0 as usize, x1 as usize);
         for (k, w) in row.iter_mut().enumerate().take(x1 / 64 + 1).skip(x0 / 64) {
             let lo = if k == x0 / 64 { x0 % 64 } else { 0 };
             let hi = if k == x1 / 64 { x1 % 64 } else { 63 };
             *w |= (u64::MAX >> (63 - hi)) & (u64::MAX << lo);
-        }
-    }
-
-    /// `words` × 64 bits of the *free* texels of row `y` from column `x` on (bit `j` of the
-    /// string: column `x + j`), appended to `out`; columns outside the canvas count as occupied.
-    fn free_words(&self, y: usize, x: i64, words: usize, out: &mut Vec<u64>) {
-        let row = &self.bits[y * self.words_per_row..][..self.words_per_row];
-        let word = |k: i64| -> u64 {
-            if k < 0 || k as usize >= row.len() {
-                0
-            } else {
-                !row[k as usize]
-            }
-        };
-        let (k0, o) = (x.div_euclid(64), x.rem_euclid(64) as u32);
-        if o == 0 {
-            out.extend((0..words as i64).map(|k| word(k0 + k)));
-        } else {
-            let mut low = word(k0);
-            for k in 1..=words as i64 {
-                let high = word(k0 + k);
-                out.push((low >> o) | (high << (64 - o)));
-                low = high;
-            }
         }
     }
 
@@ -281,18 +337,25 @@ impl Occupancy {
         let window = if self.scored { CANDIDATE_ROWS } else { 0 };
         // The least grid end of a first fit found so far; `i32::MAX` while there is none.
         let bound = AtomicI32::new(i32::MAX);
-        // The runs of `D` and the candidates `(end, x)` of every orientation.
+        // The runs of `D` and the candidates `(end, x)` of every orientation: scored, the runs
+        // of `F` against the placed keep-out zones (`F` meets no placed `D` exactly when `D`,
+        // which is `F` grown by the padding, meets no placed `F`); else the extents of `D`
+        // against the placed `F`.
         let searched: Vec<Searched> = (0..orientations.len())
             .into_par_iter()
             .filter(|&k| usable[k])
             .filter_map(|k| {
                 let o = &orientations[k];
-                let rows = if self.scored {
-                    d_rows(o)
+                let (rows, cands) = if self.scored {
+                    let rows = d_rows(o)?;
+                    let f = f_rows(o)?;
+                    let cands = self.candidates(bbox, o, &f, &gaps, window, &bound);
+                    (rows, cands)
                 } else {
-                    o.dilated.as_ref().map(hull_rows)
-                }?;
-                let cands = self.candidates(bbox, o, &rows, &gaps, window, &bound);
+                    let rows = o.dilated.as_ref().map(hull_rows)?;
+                    let cands = self.candidates(bbox, o, &rows, &gaps, window, &bound);
+                    (rows, cands)
+                };
                 (!cands.is_empty()).then_some((k, rows, cands))
             })
             .collect();
@@ -429,7 +492,7 @@ impl Occupancy {
     }
 
     /// The candidates of one orientation in `bbox`, as `(y + height, x)`: both ends of every
-    /// run of fitting positions (of the runs `rows` of `D`) of each canvas row, from its first
+    /// run of fitting positions (of the chart runs `rows`) of each canvas row, from its first
     /// fit down to the rows whose grid ends `window` rows after the least of its own first
     /// fit's end and `bound` (the least end found by any orientation so far, read again
     /// before each canvas row; lowered to its own first fit's end when it finds it). Empty
@@ -454,8 +517,8 @@ impl Occupancy {
         if w > x1 - x0 || h > y1 - y0 || rows.is_empty() {
             return out;
         }
-        // Exact pruning: every placed `F` lies inside the box, so the box has
-        // `box area − occupied` free texels, and the runs of `D` need that many at least.
+        // Exact pruning: every occupied texel lies inside the box (inside a placed grid), so
+        // the box has `box area − occupied` free texels, and the runs need that many at least.
         let needed_texels: i64 = rows.iter().map(|&(_, a, b)| i64::from(b - a) + 1).sum();
         let free_texels = i64::from(x1 - x0) * i64::from(y1 - y0) - self.occupied_texels;
         if needed_texels > free_texels {
@@ -482,43 +545,31 @@ impl Occupancy {
                     continue 'rows;
                 }
             }
-            let Some(x) = self.scan_row(y, x_lo, x_hi, &rows, &mut buffers) else {
+            if self.scan_row(y, x_lo, x_hi, &rows, &mut buffers).is_none() {
                 continue;
-            };
+            }
             if own_end.is_none() {
                 own_end = Some(y + h);
                 publish(y + h);
             }
-            // Every run of fitting positions (bits of `fit`, position `x_lo + j`): both ends.
-            let fit = &buffers.fit;
-            let bit = |j: usize| (fit[j / 64] >> (j % 64)) & 1 == 1;
-            let n = (x_hi - x_lo + 1) as usize;
-            let mut j = (x - x_lo) as usize;
-            while j < n {
-                if bit(j) {
-                    let start = j;
-                    while j + 1 < n && bit(j + 1) {
-                        j += 1;
-                    }
-                    out.push((y + h, x_lo + start as i32));
-                    if j > start {
-                        out.push((y + h, x_lo + j as i32));
-                    }
+            // Every run of fitting positions: both ends.
+            for &(p, q) in &buffers.fit {
+                out.push((y + h, p));
+                if q > p {
+                    out.push((y + h, q));
                 }
-                j += 1;
             }
         }
         out
     }
 
     /// The smallest `x` in `x_lo..=x_hi` where every chart row `(r, a, b)` finds canvas row
-    /// `y + r` free in `x + a ..= x + b`, bit-parallel: `fit` holds one bit per position
-    /// (`x_lo + j`), and each chart row keeps only the positions where its span lies inside
-    /// one free run `[s, e]` of its canvas row (the positions `s - a ..= e - b`, from the
-    /// sorted free runs of [`Row`]: the free bits eroded by the span's length, without
-    /// touching the occupied bits). Only the words between the first and the last position
-    /// still possible are worked on, and the scan stops when none is left. Cost per chart
-    /// row: O(words still possible + free runs of its canvas row met by them) word operations.
+    /// `y + r` free in `x + a ..= x + b`; every such `x` is left in `buffers.fit` as sorted,
+    /// disjoint, maximal intervals. The positions start as `x_lo..=x_hi`, and each chart row
+    /// keeps those where its span lies inside one free run `[s, e]` of its canvas row (the
+    /// positions `s - a ..= e - b`, from the row's free runs at least as long as the span,
+    /// [`Row::fitting_positions`]); the scan stops when none is left. Cost per chart row:
+    /// O(intervals left × log free runs + long enough free runs met).
     fn scan_row(
         &self,
         y: i32,
@@ -527,86 +578,23 @@ impl Occupancy {
         rows: &[(i32, i32, i32)],
         buffers: &mut ScanBuffers,
     ) -> Option<i32> {
+        let ScanBuffers { fit, next } = buffers;
+        fit.clear();
         if x_hi < x_lo {
             return None;
         }
-        let positions = (x_hi - x_lo + 1) as usize;
-        let ScanBuffers { fit, window } = buffers;
-        fit.clear();
-        fit.resize(positions.div_ceil(64), u64::MAX);
-        if positions % 64 != 0 {
-            *fit.last_mut().expect("at least one position") = (1u64 << (positions % 64)) - 1;
-        }
+        fit.push((x_lo, x_hi));
         // Columns past the bitmap's words count as occupied (and before column 0).
-        let canvas_end = (64 * self.words_per_row) as i64 - 1;
-        let (mut first, mut last) = (0usize, fit.len() - 1);
+        let canvas_end = (64 * self.words_per_row) as i32 - 1;
         for &(r, a, b) in rows {
-            let span = i64::from(b - a);
-            // Position j reads columns base + j ..= base + j + span.
-            let base = i64::from(x_lo) + i64::from(a);
-            let (j_lo, j_hi) = (64 * first as i64, 64 * last as i64 + 63);
-            let row = &self.rows[(y + r) as usize];
-            let out_words = last - first + 1;
-            let len = (b - a + 1) as usize;
-            // Two exact ways to the same bits; the cheaper by its word operations: the free runs
-            // met (few on most rows), or the free bits eroded by the span's length by log-step
-            // shifts (rows cut into many short runs, as on pages of thousands of charts).
-            let met = row.free_runs_met(base + j_lo, base + j_hi + span);
-            let shift_words = (out_words + (len - 1).div_ceil(64) + 1)
-                * (usize::BITS - len.leading_zeros()) as usize;
-            if 4 * met > shift_words {
-                let start = base + j_lo;
-                let words = out_words + (len - 1).div_ceil(64) + 1;
-                window.clear();
-                self.free_words((y + r) as usize, start, words, window);
-                let mut done = 1usize;
-                while done < len {
-                    let shift = done.min(len - done);
-                    shift_and(window, shift);
-                    done += shift;
-                }
-                for (f, w) in fit[first..=last].iter_mut().zip(window.iter()) {
-                    *f &= *w;
-                }
-                while first <= last && fit[first] == 0 {
-                    first += 1;
-                }
-                if first > last {
-                    return None;
-                }
-                while fit[last] == 0 {
-                    last -= 1;
-                }
-                continue;
-            }
-            window.clear();
-            window.resize(out_words, 0);
-            let mut any = false;
-            row.free_runs(base + j_lo, base + j_hi + span, canvas_end, |s, e| {
-                let (p, q) = ((s - base).max(j_lo), (e - span - base).min(j_hi));
-                if p <= q {
-                    set_bits(window, (p - j_lo) as usize, (q - j_lo) as usize);
-                    any = true;
-                }
-            });
-            if !any {
+            next.clear();
+            self.rows[(y + r) as usize].fitting_positions(a, b, canvas_end, fit, next);
+            std::mem::swap(fit, next);
+            if fit.is_empty() {
                 return None;
-            }
-            for (f, w) in fit[first..=last].iter_mut().zip(window.iter()) {
-                *f &= *w;
-            }
-            while first <= last && fit[first] == 0 {
-                first += 1;
-            }
-            if first > last {
-                return None;
-            }
-            while fit[last] == 0 {
-                last -= 1;
             }
         }
-        let j = 64 * first + fit[first].trailing_zeros() as usize;
-        Some(x_lo + j as i32)
+        Some(fit[0].0)
     }
 }
 
@@ -686,6 +674,15 @@ fn d_rows(o: &Orientation) -> Option<Vec<(i32, i32, i32)>> {
         }
         None => hull_rows(d),
     })
+}
+
+/// The rows of `F` as runs `(row, first, last)` on the grid of `D`, row by row, left to right
+/// (exact: the texels of `F`; `None` when not rasterized).
+fn f_rows(o: &Orientation) -> Option<Vec<(i32, i32, i32)>> {
+    let bits = o.footprint_bits.as_ref()?;
+    let mut v = Vec::new();
+    bits.for_each_run(|r, a, b| v.push((r as i32, a as i32, b as i32)));
+    Some(v)
 }
 
 /// The per-row extents of `D` as runs `(row, first, last)` (a superset of its texels).
@@ -788,31 +785,6 @@ fn ring_runs(rows: &[(i32, i32, i32)], h: i32) -> Vec<(i32, i32, i32)> {
         }
     }
     out
-}
-
-/// `v &= v >> shift` over a little-endian multi-word bit string (bit `j` of the result: bits
-/// `j` and `j + shift` of `v`; bits past the end count as clear). In place, low words first
-/// (each reads only words at or above its own, not yet written).
-fn shift_and(v: &mut [u64], shift: usize) {
-    let (ws, bs) = (shift / 64, (shift % 64) as u32);
-    let n = v.len();
-    if ws >= n {
-        v.fill(0);
-        return;
-    }
-    // Words whose sources are all inside `v`, then the tail.
-    let inner = n - ws - 1;
-    if bs == 0 {
-        for k in 0..n - ws {
-            v[k] &= v[k + ws];
-        }
-    } else {
-        for k in 0..inner {
-            v[k] &= (v[k + ws] >> bs) | (v[k + ws + 1] << (64 - bs));
-        }
-        v[inner] &= v[n - 1] >> bs;
-    }
-    v[n - ws..].fill(0);
 }
 
 #[cfg(test)]

@@ -280,6 +280,22 @@ impl HorizonPage {
             bits.for_each_run(|r, a, b| {
                 occupancy.occupy(py + r as i32, px + a as i32, px + b as i32);
             });
+            if occupancy.keeps_out() {
+                // The keep-out zone: `D` itself, or its per-row extents (a superset) when its
+                // texels were not kept.
+                let mut mark = |r: i32, a: i32, b: i32| occupancy.keep_out(py + r, px + a, px + b);
+                match (&o.dilated_bits, &o.dilated) {
+                    (Some(d), _) => d.for_each_run(|r, a, b| mark(r as i32, a as i32, b as i32)),
+                    (None, Some(d)) => {
+                        for (r, &(a, b)) in d.rows.iter().enumerate() {
+                            if (a, b) != EMPTY {
+                                mark(r as i32, a, b);
+                            }
+                        }
+                    }
+                    (None, None) => {}
+                }
+            }
         }
         let (w, h) = (o.width_texels as i32, o.height_texels as i32);
         let b = [px, py, px + w, py + h];

@@ -492,7 +492,11 @@ fn orient(
     } else {
         ([0.0; 2], [0.0; 2])
     };
-    let pad = f64::from(padding_texels);
+    // The mask keeps one texel more than the padding around the chart's texel span: the
+    // touched texels of the footprint can reach one texel past that span, and `D`, the
+    // footprint grown by the padding, must not be cut off by the mask's edge (the grid is
+    // trimmed to `D` below).
+    let margin = padding_texels as usize + 1;
     let mut affine = [[m[0][0], m[0][1], 0.0], [m[1][0], m[1][1], 0.0]];
     let mut dims = [0i64; 2];
     for axis in 0..2 {
@@ -504,7 +508,7 @@ fn orient(
         } else {
             i64::MAX / 4
         };
-        affine[axis][2] = pad + 0.5 * (n - e) - lo[axis];
+        affine[axis][2] = margin as f64 + 0.5 * (n - e) - lo[axis];
     }
     let mut o = Orientation {
         affine,
@@ -518,7 +522,7 @@ fn orient(
     if dims[0] > i64::from(page_texels[0]) || dims[1] > i64::from(page_texels[1]) {
         return o;
     }
-    let mut mask = Mask::new(dims[0] as u32, dims[1] as u32);
+    let mut mask = Mask::new(dims[0] as u32 + 2, dims[1] as u32 + 2);
     // Every vertex once (not once per triangle corner).
     let local: Vec<[f64; 2]> = chart.uv.iter().map(|&p| o.apply(prep.centre, p)).collect();
     // The union of the well-shaped triangles from their boundary chain (cost of the boundary,
@@ -586,7 +590,8 @@ fn orient(
     }
     if chart.triangles.is_empty() {
         // A chart without triangles still gets its one texel.
-        mask.set_span(padding_texels, padding_texels, padding_texels);
+        let m = margin as u32;
+        mask.set_span(m, m, m);
     }
     let f = Extents::of(&mask);
     // The padded footprint's texels (for the contact-scored hole search); its extents from
@@ -621,9 +626,8 @@ fn orient(
     };
     // The grid keeps the whole chart too (its texel span, inside the padding margin), so that
     // keeping the grid on the page keeps every UV in [0,1].
-    let pad = padding_texels as usize;
-    let (x0, x1) = (x0.min(pad), x1.max(dims[0] as usize - 1 - pad));
-    let (y0, y1) = (y0.min(pad), y1.max(dims[1] as usize - 1 - pad));
+    let (x0, x1) = (x0.min(margin), x1.max(mask.width() as usize - 1 - margin));
+    let (y0, y1) = (y0.min(margin), y1.max(mask.height() as usize - 1 - margin));
     let cut = |e: &Extents| {
         let shift = |v: &[(i32, i32)], by: i32| -> Vec<(i32, i32)> {
             v.iter()
@@ -887,6 +891,16 @@ mod tests {
                 }
             });
             concave += usize::from(runs_per_row.iter().any(|&n| n > 1));
+            // `D` is `F` grown by the padding whole, never cut by the grid's edge: every texel
+            // of `F` lies at least the padding inside the grid (the keep-out zones of the hole
+            // search rely on it).
+            f.for_each_run(|r, a, b| {
+                let (r, a, b) = (r as i32, a as i32, b as i32);
+                assert!(
+                    r >= 2 && r < h - 2 && a >= 2 && b < w - 2,
+                    "chart {i} orientation {k}: F run ({r}, {a}, {b}) within the padding of the {w}×{h} grid's edge"
+                );
+            });
             for y in 0..h {
                 for x in 0..w {
                     let near = (y - 2..=y + 2).any(|v| {
@@ -915,6 +929,38 @@ mod tests {
             concave > 0,
             "no orientation with a row of D in several runs"
         );
+    }
+
+    #[test]
+    fn footprints_of_slivers_keep_the_padding_inside_their_grid() {
+        // Thin triangles at random angles and densities: their footprints take the touched
+        // texels beyond the sampled ones, which can reach past the chart's texel span; the
+        // grid still holds `F` grown by the padding whole (so `D` is never cut by the grid).
+        let mut seed = 0x5eed_0f51_1ce5u64;
+        let mut next = || crate::atlas::pack::test_charts::xorshift(&mut seed);
+        let mut runs = 0;
+        for i in 0..300 {
+            let a = [next() * 3.0, next() * 3.0];
+            let b = [a[0] + 1.0 + next() * 4.0, a[1] + next() * 4.0];
+            let t = next() * 0.02;
+            let c = [(a[0] + b[0]) / 2.0 + t, (a[1] + b[1]) / 2.0 - t];
+            let owned = crate::atlas::pack::test_charts::triangle([a, b, c]);
+            let chart = owned.as_pack_chart();
+            let prep = prepare_chart(i, &chart).unwrap();
+            let density = 1.0 + 9.0 * next();
+            for o in orientations(&chart, &prep, density, 8, 2, [1024, 1024], true) {
+                let (w, h) = (o.width_texels as u32, o.height_texels as u32);
+                let Some(f) = &o.footprint_bits else { continue };
+                f.for_each_run(|r, a, b| {
+                    runs += 1;
+                    assert!(
+                        r >= 2 && r + 2 < h && a >= 2 && b + 2 < w,
+                        "sliver {i}: F run ({r}, {a}, {b}) within the padding of the {w}×{h} grid's edge"
+                    );
+                });
+            }
+        }
+        assert!(runs > 1000, "{runs}");
     }
 
     #[test]

@@ -1,6 +1,4 @@
-use super::{
-    d_rows, ring_runs, shift_and, spread_out, Occupancy, RingBits, Row, ScanBuffers, CANDIDATE_ROWS,
-};
+use super::{d_rows, ring_runs, spread_out, Occupancy, RingBits, Row, ScanBuffers, CANDIDATE_ROWS};
 use crate::atlas::pack::place::{orientations, prepare_chart};
 use crate::atlas::pack::test_charts::{mixed_set, xorshift64};
 
@@ -12,7 +10,8 @@ fn striped_canvas(
     next: &mut impl FnMut(i32) -> i32,
     [start, run, gap]: [i32; 3],
 ) -> (Occupancy, Vec<bool>) {
-    let mut occ = Occupancy::new(w, h);
+    // The plain first fit's map: its rows hold the occupied texels themselves.
+    let mut occ = Occupancy::new(w, h).first_fit_only();
     let mut taken = vec![false; (w * h) as usize];
     for y in 0..h {
         let mut x = next(start);
@@ -28,8 +27,9 @@ fn striped_canvas(
 use std::collections::BTreeSet;
 
 /// A row of `W` columns filled by random disjoint runs, checked after every run against a
-/// plain array: occupancy per column, the longest free run, and the first fit of random
-/// chart rows (columns outside `0..W` are free, as on the canvas beyond the placed charts).
+/// plain array: occupancy per column, the longest free run (columns outside `0..W` free, as
+/// on the canvas beyond the placed charts), and the positions at which random chart rows fit
+/// among random intervals of positions.
 #[test]
 fn a_row_agrees_with_a_plain_array() {
     const W: i32 = 160;
@@ -59,29 +59,38 @@ fn a_row_agrees_with_a_plain_array() {
                 longest = longest.max(current);
             }
             assert_eq!(row.max_gap(0, W), longest);
-            // The free runs of columns 0..=end that meet lo..=hi: every maximal one, once.
+            // The positions x among random intervals at which columns x + a ..= x + b lie in
+            // free columns of 0..=end (beyond `end`, and before 0, columns count as occupied).
             let end = W + next(8);
-            let (lo, hi) = (next(W + 10) - 5, next(W + 10) - 5);
-            let free_in = |x: i32| x <= end && free(x);
+            let free_in = |x: i32| (0..=end).contains(&x) && free(x);
+            let a = next(6);
+            let long = next(3) == 0;
+            let b = a + next(if long { 40 } else { 6 });
+            let mut cands = Vec::new();
+            let mut x = next(12) - 8;
+            while x < W + 4 {
+                let q = x + next(30);
+                cands.push((x, q));
+                x = q + 2 + next(20);
+            }
+            let fits = |x: i32| (x + a..=x + b).all(free_in);
             let mut expected = Vec::new();
-            let mut x = 0;
-            while x <= end {
-                if free_in(x) {
-                    let s = x;
-                    while x < end && free_in(x + 1) {
-                        x += 1;
+            for &(p, q) in &cands {
+                let mut x = p;
+                while x <= q {
+                    if fits(x) {
+                        let s = x;
+                        while x < q && fits(x + 1) {
+                            x += 1;
+                        }
+                        expected.push((s, x));
                     }
-                    if x >= lo && s <= hi {
-                        expected.push((i64::from(s), i64::from(x)));
-                    }
+                    x += 1;
                 }
-                x += 1;
             }
             let mut got = Vec::new();
-            row.free_runs(i64::from(lo), i64::from(hi), i64::from(end), |s, e| {
-                got.push((s, e))
-            });
-            assert_eq!(got, expected, "columns {lo}..={hi} up to {end}");
+            row.fitting_positions(a, b, end, &cands, &mut got);
+            assert_eq!(got, expected, "span {a}..={b} up to {end} in {cands:?}");
         }
     }
     assert!(runs > 200, "{runs}");
@@ -122,15 +131,25 @@ fn scan_row_finds_the_first_fit_of_a_brute_force() {
                 let got = occ.scan_row(y, x_lo, x_hi, &rows, &mut buffers);
                 assert_eq!(got, expected, "y {y} rows {rows:?} x {x_lo}..={x_hi}");
                 if got.is_some() {
-                    // The candidates of `find` read every fitting position from `fit`.
-                    for x in x_lo..=x_hi {
-                        let j = (x - x_lo) as usize;
-                        let bit = (buffers.fit[j / 64] >> (j % 64)) & 1 == 1;
-                        let fits = rows
-                            .iter()
-                            .all(|&(r, a, b)| (x + a..=x + b).all(|c| free(c, y + r)));
-                        assert_eq!(bit, fits, "y {y} x {x} rows {rows:?}");
+                    // The candidates of `find` read every fitting position from `fit`: the
+                    // maximal runs of fitting positions, in order.
+                    let mut want = Vec::new();
+                    let fits = |x: i32| {
+                        rows.iter()
+                            .all(|&(r, a, b)| (x + a..=x + b).all(|c| free(c, y + r)))
+                    };
+                    let mut x = x_lo;
+                    while x <= x_hi {
+                        if fits(x) {
+                            let s = x;
+                            while x < x_hi && fits(x + 1) {
+                                x += 1;
+                            }
+                            want.push((s, x));
+                        }
+                        x += 1;
                     }
+                    assert_eq!(buffers.fit, want, "y {y} rows {rows:?}");
                 }
                 if got.is_some() {
                     found += 1;
@@ -250,15 +269,38 @@ fn find_takes_the_best_scoring_candidate_of_a_brute_force() {
         let mut taken = vec![false; (W * H) as usize];
         let bbox = [8, 6, W - 8, H - 6];
         for _ in 0..30 + 10 * canvas {
-            let (x, y) = (bbox[0] + next(130), bbox[1] + next(100));
+            // Taken texels at least the padding inside the box, as placed `F` are (their `D`
+            // lies inside the box).
+            let (x, y) = (bbox[0] + 2 + next(126), bbox[1] + 2 + next(96));
             let (w, h) = (1 + next(16), 1 + next(12));
-            for r in y..(y + h).min(bbox[3]) {
-                let e = (x + w - 1).min(bbox[2] - 1);
+            for r in y..(y + h).min(bbox[3] - 2) {
+                let e = (x + w - 1).min(bbox[2] - 3);
                 if (x..=e).any(|c| taken[(r * W + c) as usize]) {
                     continue;
                 }
                 occ.occupy(r, x, e);
                 (x..=e).for_each(|c| taken[(r * W + c) as usize] = true);
+            }
+        }
+        // The keep-out zones: every texel within the padding (2) of a taken one, row by row.
+        for r in 0..H {
+            let near = |c: i32| {
+                (r - 2..=r + 2).any(|v| {
+                    (c - 2..=c + 2).any(|u| {
+                        (0..W).contains(&u) && (0..H).contains(&v) && taken[(v * W + u) as usize]
+                    })
+                })
+            };
+            let mut c = 0;
+            while c < W {
+                if near(c) {
+                    let s = c;
+                    while c + 1 < W && near(c + 1) {
+                        c += 1;
+                    }
+                    occ.keep_out(r, s, c);
+                }
+                c += 1;
             }
         }
         for (i, owned) in charts.iter().enumerate() {
@@ -383,25 +425,4 @@ fn contact_bits_agrees_with_contact() {
         occupied += usize::from(expected > 0);
     }
     assert!(edge > 50 && occupied > 200, "{edge} {occupied}");
-}
-
-#[test]
-fn shift_and_matches_a_plain_array() {
-    let mut seed = 0x1234_5678_9abc_def1u64;
-    let mut next = || xorshift64(&mut seed);
-    for n in 1..6usize {
-        for shift in [0usize, 1, 5, 63, 64, 65, 100, 127, 128, 200, 400] {
-            let v: Vec<u64> = (0..n).map(|_| next() | next()).collect();
-            let bit = |v: &[u64], j: usize| j < 64 * v.len() && (v[j / 64] >> (j % 64)) & 1 == 1;
-            let mut w = v.clone();
-            shift_and(&mut w, shift);
-            for j in 0..64 * n {
-                assert_eq!(
-                    bit(&w, j),
-                    bit(&v, j) && bit(&v, j + shift),
-                    "n {n} shift {shift} bit {j}"
-                );
-            }
-        }
-    }
 }
