@@ -45,9 +45,11 @@
 //! spread out) keeps only the positions where it lies inside one free run `[s, e]` of its
 //! canvas row at least as long — the positions `s − a ..= e − b` — until none is left or
 //! every run is done.
-//! The orientations are searched in parallel, sharing the least first-fit end found so far
-//! as a bound (never below `E`, so every search still collects every candidate within
-//! [`CANDIDATE_ROWS`] of `E`): the same placement whatever the thread count. Only the
+//! The orientations are searched in parallel (each worker a share of them, going down the
+//! box together [`SCAN_BLOCK_ROWS`] rows at a time, so that a first fit stops the others soon
+//! after it), sharing the least first-fit end found so far as a bound (never below `E`, so
+//! every search still collects every candidate within [`CANDIDATE_ROWS`] of `E`): the same
+//! placement whatever the thread count. Only the
 //! candidates within [`CANDIDATE_ROWS`] of `E` are scored (their contact counted), once `E`
 //! is known.
 //!
@@ -249,6 +251,32 @@ pub struct Occupancy {
     scored: bool,
 }
 
+/// One orientation's search in a box ([`Occupancy::scan_start`], [`Occupancy::scan_rows`]).
+#[derive(Debug)]
+struct Scan {
+    /// The chart's runs `(row, first, last)`, in the order they are tested.
+    rows: Vec<(i32, i32, i32)>,
+    /// Grid height, texels.
+    height: i32,
+    /// The grid origins' columns that keep the grid in the box.
+    x_range: (i32, i32),
+    /// The next grid row to test.
+    y: i32,
+    /// The grid end of its first fit, once found.
+    own_end: Option<i32>,
+    /// Its candidates `(y + height, x)`.
+    out: Vec<(i32, i32)>,
+    buffers: ScanBuffers,
+    /// Whether its search is over.
+    done: bool,
+}
+
+/// Rows each orientation's search goes down before the next orientation's takes its turn
+/// ([`Occupancy::find`]). Trade-off: fewer rows let a first fit bound the other orientations
+/// sooner (each searches at most this many rows more than it needs), more rows cost fewer
+/// switches between the searches.
+pub const SCAN_BLOCK_ROWS: i32 = 8;
+
 /// Scratch buffers of [`Occupancy::scan_row`]: the positions that fit every chart row so far
 /// (sorted, disjoint, inclusive intervals), and those that also fit the next chart row.
 #[derive(Debug, Default)]
@@ -341,23 +369,44 @@ impl Occupancy {
         // of `F` against the placed keep-out zones (`F` meets no placed `D` exactly when `D`,
         // which is `F` grown by the padding, meets no placed `F`); else the extents of `D`
         // against the placed `F`.
-        let searched: Vec<Searched> = (0..orientations.len())
+        let n = orientations.len();
+        let mut scans: Vec<(usize, Runs, Scan)> = (0..n)
             .into_par_iter()
             .filter(|&k| usable[k])
             .filter_map(|k| {
                 let o = &orientations[k];
-                let (rows, cands) = if self.scored {
+                let (rows, scan) = if self.scored {
                     let rows = d_rows(o)?;
-                    let f = f_rows(o)?;
-                    let cands = self.candidates(bbox, o, &f, &gaps, window, &bound);
-                    (rows, cands)
+                    let scan = self.scan_start(bbox, o, &f_rows(o)?)?;
+                    (rows, scan)
                 } else {
                     let rows = o.dilated.as_ref().map(hull_rows)?;
-                    let cands = self.candidates(bbox, o, &rows, &gaps, window, &bound);
-                    (rows, cands)
+                    let scan = self.scan_start(bbox, o, &rows)?;
+                    (rows, scan)
                 };
-                (!cands.is_empty()).then_some((k, rows, cands))
+                Some((k, rows, scan))
             })
+            .collect();
+        // The orientations go down the box together, [`SCAN_BLOCK_ROWS`] rows at a time (each
+        // worker a share of them), so that the first fit any of them finds bounds the others
+        // before they search far below it.
+        let share = scans
+            .len()
+            .div_ceil(rayon::current_num_threads().max(1))
+            .max(1);
+        scans.par_chunks_mut(share).for_each(|part| {
+            let mut until = y0;
+            while part.iter().any(|s| !s.2.done) {
+                until += SCAN_BLOCK_ROWS;
+                for (_, _, scan) in part.iter_mut().filter(|s| !s.2.done) {
+                    self.scan_rows(scan, until, bbox, &gaps, window, &bound);
+                }
+            }
+        });
+        let searched: Vec<Searched> = scans
+            .into_iter()
+            .filter(|s| !s.2.out.is_empty())
+            .map(|(k, rows, scan)| (k, rows, scan.out))
             .collect();
         let first_end = searched
             .iter()
@@ -491,38 +540,25 @@ impl Occupancy {
         n
     }
 
-    /// The candidates of one orientation in `bbox`, as `(y + height, x)`: both ends of every
-    /// run of fitting positions (of the chart runs `rows`) of each canvas row, from its first
-    /// fit down to the rows whose grid ends `window` rows after the least of its own first
-    /// fit's end and `bound` (the least end found by any orientation so far, read again
-    /// before each canvas row; lowered to its own first fit's end when it finds it). Empty
-    /// when it does not fit or its first fit ends more than `window` rows after `bound`.
-    fn candidates(
+    /// The search of one orientation in `bbox` with the chart runs `rows`, before its first
+    /// canvas row, or `None` when it cannot fit: its grid is larger than the box, or the runs
+    /// need more texels than the box has free (exact: every occupied texel lies inside the
+    /// box, inside a placed grid).
+    fn scan_start(
         &self,
         bbox: [i32; 4],
         o: &Orientation,
         rows: &[(i32, i32, i32)],
-        gaps: &[i32],
-        window: i32,
-        bound: &std::sync::atomic::AtomicI32,
-    ) -> Vec<(i32, i32)> {
-        use std::sync::atomic::Ordering;
-        let publish = |end: i32| {
-            bound.fetch_min(end, Ordering::Relaxed);
-        };
-        let bound = || bound.load(Ordering::Relaxed);
-        let mut out = Vec::new();
+    ) -> Option<Scan> {
         let [x0, y0, x1, y1] = bbox;
         let (w, h) = (o.width_texels as i32, o.height_texels as i32);
         if w > x1 - x0 || h > y1 - y0 || rows.is_empty() {
-            return out;
+            return None;
         }
-        // Exact pruning: every occupied texel lies inside the box (inside a placed grid), so
-        // the box has `box area − occupied` free texels, and the runs need that many at least.
         let needed_texels: i64 = rows.iter().map(|&(_, a, b)| i64::from(b - a) + 1).sum();
         let free_texels = i64::from(x1 - x0) * i64::from(y1 - y0) - self.occupied_texels;
         if needed_texels > free_texels {
-            return out;
+            return None;
         }
         // Longest run first (ties: first run): it rejects most canvas rows. The others spread
         // out (bit-reversed order of their row): far-apart rows are less alike than
@@ -531,36 +567,74 @@ impl Occupancy {
         let key = (0..rows.len())
             .max_by_key(|&i| (rows[i].2 - rows[i].1, std::cmp::Reverse(i)))
             .unwrap_or(0);
-        let rows = spread_out(rows, key);
-        let mut buffers = ScanBuffers::default();
-        let (x_lo, x_hi) = (x0, x1 - w);
-        let mut own_end: Option<i32> = None;
-        'rows: for y in y0..=y1 - h {
-            let limit = own_end.map_or(bound(), |e| e.min(bound()));
+        Some(Scan {
+            rows: spread_out(rows, key),
+            height: h,
+            x_range: (x0, x1 - w),
+            y: y0,
+            own_end: None,
+            out: Vec::new(),
+            buffers: ScanBuffers::default(),
+            done: false,
+        })
+    }
+
+    /// Goes on with the search `scan` on the canvas rows before `until_y`: collects its
+    /// candidates `(y + height, x)`, both ends of every run of fitting positions of each
+    /// canvas row, from its first fit down to the rows whose grid ends `window` rows after the
+    /// least of its own first fit's end and `bound` (the least end found by any orientation so
+    /// far, read again before each canvas row; lowered to its own first fit's end when it
+    /// finds it), and marks it done there or at the box's last row. No candidate when it does
+    /// not fit or its first fit ends more than `window` rows after `bound`.
+    fn scan_rows(
+        &self,
+        scan: &mut Scan,
+        until_y: i32,
+        bbox: [i32; 4],
+        gaps: &[i32],
+        window: i32,
+        bound: &std::sync::atomic::AtomicI32,
+    ) {
+        use std::sync::atomic::Ordering;
+        let [_, y0, _, y1] = bbox;
+        let h = scan.height;
+        let (x_lo, x_hi) = scan.x_range;
+        let last = (y1 - h).min(until_y - 1);
+        'rows: while scan.y <= last {
+            let y = scan.y;
+            scan.y += 1;
+            let b = bound.load(Ordering::Relaxed);
+            let limit = scan.own_end.map_or(b, |e| e.min(b));
             if limit != i32::MAX && y + h > limit + window {
-                break;
+                scan.done = true;
+                return;
             }
-            for &(r, a, b) in &rows {
+            for &(r, a, b) in &scan.rows {
                 if gaps[(y - y0 + r) as usize] < b - a + 1 {
                     continue 'rows;
                 }
             }
-            if self.scan_row(y, x_lo, x_hi, &rows, &mut buffers).is_none() {
+            if self
+                .scan_row(y, x_lo, x_hi, &scan.rows, &mut scan.buffers)
+                .is_none()
+            {
                 continue;
             }
-            if own_end.is_none() {
-                own_end = Some(y + h);
-                publish(y + h);
+            if scan.own_end.is_none() {
+                scan.own_end = Some(y + h);
+                bound.fetch_min(y + h, Ordering::Relaxed);
             }
             // Every run of fitting positions: both ends.
-            for &(p, q) in &buffers.fit {
-                out.push((y + h, p));
+            for &(p, q) in &scan.buffers.fit {
+                scan.out.push((y + h, p));
                 if q > p {
-                    out.push((y + h, q));
+                    scan.out.push((y + h, q));
                 }
             }
         }
-        out
+        if scan.y > y1 - h {
+            scan.done = true;
+        }
     }
 
     /// The smallest `x` in `x_lo..=x_hi` where every chart row `(r, a, b)` finds canvas row
