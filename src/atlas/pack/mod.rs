@@ -31,9 +31,8 @@
 //!
 //! Invariant: deterministic. Integer horizons, fixed orders, ties by index, no hash maps; the
 //! parallel parts (footprints of a batch of charts, the sides of a horizon search, the
-//! orientations of a hole search) are reduced in a fixed order, and a trial of the density
-//! search packed ahead is used only when the search asks for exactly its density, so the
-//! result does not depend on the thread count.
+//! orientations of a hole search) are reduced in a fixed order, so the result does not
+//! depend on the thread count.
 //!
 //! Units: chart UVs come in model units (as the parameterizer returns them); placed UVs are
 //! normalized page coordinates in \[0,1\]² (u right, v down, glTF convention); sizes on the page
@@ -481,24 +480,8 @@ impl Context<'_, '_> {
         multi_page: bool,
         progress: &mut Steps<'_>,
     ) -> Result<Trial, PackError> {
-        self.count_trial();
-        self.run_uncounted(texels_per_unit, multi_page, progress)
-    }
-
-    /// Counts one packing in [`Packing::trials`].
-    fn count_trial(&self) {
         self.trials
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    }
-
-    /// [`Self::run`] without counting the trial (a trial packed ahead is counted only when
-    /// the search uses it).
-    fn run_uncounted(
-        &self,
-        texels_per_unit: f64,
-        multi_page: bool,
-        progress: &mut Steps<'_>,
-    ) -> Result<Trial, PackError> {
         let o = self.options;
         let [w, h] = self.page();
         let mut trial = Trial {
@@ -678,12 +661,8 @@ fn unit(v: f64) -> f64 {
 /// bracket, upwards until one does not fit ([`FitSearch`]). A failing trial stops at its first
 /// chart that does not fit, so it costs at most a full one. Deterministic; at most
 /// [`MAX_FIT_TRIALS`] + [`FIT_PROBES`] trials (+1 last-resort trial at a density where every
-/// chart is below a texel).
-///
-/// With more than one thread, the trial that would come next if this one had the predicted
-/// outcome is packed at the same time. Trade-off: a correct prediction saves a trial's time;
-/// a missed one costs the two trials sharing the cores instead of one trial using both (the
-/// result is the same either way).
+/// chart is below a texel). The trials run one after another, each using every thread
+/// (footprints, horizon sides, hole-search orientations).
 fn fit_to_page(
     ctx: &Context<'_, '_>,
     start: FitStart,
@@ -739,49 +718,8 @@ fn fit_to_page(
         ..FitSearch::default()
     };
     let mut fit: Option<Trial> = None;
-    // With more than one thread, the trial the search would run next if this one had the
-    // predicted outcome ([`FitSearch::predicted`]) is packed at the same time, by the pool;
-    // it is used only when the search asks for exactly that density next (bit for bit), so
-    // the trials, their count and the result are those of the sequential search.
-    let speculate = rayon::current_num_threads() > 1;
-    let mut ready: Option<Trial> = None;
     loop {
-        let (t, spec) = match ready.take() {
-            Some(t) => {
-                // Packed ahead: its progress steps now (and the monitor may cancel).
-                for _ in 0..ctx.order.len() {
-                    progress.step()?;
-                }
-                (t, None)
-            }
-            None => {
-                let ahead = if speculate {
-                    let (fitted, ratio) = search.predicted();
-                    search.clone().next(d, fitted, ratio).map(clamp_d)
-                } else {
-                    None
-                };
-                match ahead {
-                    Some(d2) => {
-                        let mut spec = None;
-                        let t = rayon::in_place_scope(|scope| {
-                            let spec = &mut spec;
-                            scope.spawn(move |_| {
-                                let mut quiet = |_: (usize, usize)| ControlFlow::Continue(());
-                                *spec = Some(ctx.run_uncounted(
-                                    d2,
-                                    false,
-                                    &mut Steps::new(&mut quiet, 1),
-                                ));
-                            });
-                            ctx.run(d, false, &mut progress)
-                        })?;
-                        (t, spec.map(|r| (d2, r)))
-                    }
-                    None => (ctx.run(d, false, &mut progress)?, None),
-                }
-            }
-        };
+        let t = ctx.run(d, false, &mut progress)?;
         let fitted = t.unplaced == 0;
         if !fitted && beat.is_some_and(|b| d <= b) {
             // Nothing above the density to beat fits where it was tried.
@@ -792,12 +730,6 @@ fn fit_to_page(
             fit = Some(t);
         }
         let Some(n) = next else { break };
-        if let Some((d2, r)) = spec {
-            if d2.to_bits() == n.to_bits() {
-                ctx.count_trial();
-                ready = Some(r?);
-            }
-        }
         d = n;
     }
     let t = match fit {
@@ -827,8 +759,7 @@ fn fit_to_page(
 }
 
 /// The density search of [`fit_to_page`] as a state machine: which density to pack next,
-/// given the last one and its outcome (so that the next trial can be predicted and packed
-/// ahead, [`FitSearch::predicted`]).
+/// given the last one and its outcome.
 #[derive(Debug, Clone, Default)]
 struct FitSearch {
     /// Largest density known to fit, smallest known not to fit (search phase).
@@ -921,17 +852,6 @@ impl FitSearch {
             (None, _) if self.floor.is_some() => (d / ratio).max(self.floor?),
             _ => d / ratio,
         })
-    }
-
-    /// The outcome to bet on for packing ahead: before a bracket, that the trial fits and
-    /// fills the page (the search then grows by its next step); once bracketed, or while probing, that
-    /// it does not fit (the usual case on the corpus: most bisection steps and probes fail).
-    fn predicted(&self) -> (bool, f64) {
-        if self.probe == 0 && self.hi.is_none() {
-            (true, 1.0)
-        } else {
-            (false, 1.0 + FIT_TOLERANCE)
-        }
     }
 }
 

@@ -452,10 +452,10 @@ fn slivers_that_cover_no_texel_centre_are_never_overlapped() {
 }
 
 #[test]
-fn the_density_search_packed_ahead_matches_the_sequential_one() {
-    // With one thread no trial is packed ahead; with two, the predicted next trial is packed
-    // at the same time and used only when the search asks for it: the same packing, density
-    // and trial count either way (several chart sets, so that predictions both hit and miss).
+fn one_or_two_threads_give_the_same_packing() {
+    // The parallel parts (footprints, horizon sides, the orientations of the hole search)
+    // reduce in a fixed order: the same packing, density and trial count either way, on
+    // several chart sets.
     for (n, seed) in [(40, 5), (25, 11), (60, 3)] {
         let charts = mixed_set(n, seed);
         let options = PackOptions::default();
