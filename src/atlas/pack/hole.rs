@@ -11,9 +11,9 @@
 //! kind). The caller updates the four horizons with the new `F` as for any placement.
 //!
 //! Model. [`Occupancy`] keeps, per canvas row, the first and last occupied column with the
-//! sorted free runs in between (and the runs of at least [`LONG_RUNS`] texels apart, for the
-//! longest free run of a row and for long chart rows), and the placed `F` as a bitmap (for
-//! the contact score). What the rows hold depends on the search:
+//! sorted free runs in between (their longest, for the row filter, and apart those at least
+//! `LONG_RUNS` texels long, which long chart runs search), and the placed `F` as a bitmap
+//! (for the contact score). What the rows hold depends on the search:
 //! - **Scored** (the default): the union of the placed `D` (each `F` grown by the padding,
 //!   the *keep-out zones*), tested by the runs of the new chart's `F` (exact: the texels of
 //!   `F` row by row, so that a concave chart can wrap around placed ones). `F` meets no placed
