@@ -149,6 +149,20 @@ pub fn chart_rotations(
 /// few charts the first fit leaves room for the pipeline's packing-aware cuts, which run on at
 /// most 32 charts (so the two never interact).
 pub const HOLE_SCORED_MIN_CHARTS: usize = 33;
+/// A single-page trial with hole filling that meets a chart it cannot place goes on with the
+/// next charts until more than this many did not fit, or their area is above
+/// [`HOLE_SKIPS_AREA_FRACTION`] of all charts; then (and in a horizon trial at the first
+/// failure) it stops and counts the charts not tried as not placed too. The fit-to-page search
+/// shrinks the density by what was not placed: charts after a failure often still fit in the
+/// gaps, so counting them all overstates the shrink, and the bisection back up costs full
+/// packings. Trade-off: a failing trial costs a little more (a search of the whole page per
+/// chart skipped); 2CylinderEngine's pack stage 6.6 s → 3.4 s (17 → 14 trials, packing
+/// 0.5971 → 0.5964, within the search's tolerance), no change elsewhere on the corpus.
+pub const HOLE_SKIPS_MAX: usize = 16;
+
+/// See [`HOLE_SKIPS_MAX`]: the area of the charts not placed, as a fraction of all charts',
+/// above which a hole-filling trial stops (a large chart that does not fit says enough).
+pub const HOLE_SKIPS_AREA_FRACTION: f64 = 0.02;
 /// Density step of the probes of [`FIT_PROBES`], as a ratio.
 pub const FIT_PROBE_STEP: f64 = 0.01;
 
@@ -449,9 +463,9 @@ struct Trial {
     placed: Vec<Option<Placed>>,
     pages: Vec<horizon::HorizonPage>,
     /// Σ area_m2 of the charts not placed (single-page trials stop at the first that does not
-    /// fit).
+    /// fit, hole filling after [`HOLE_SKIPS_MAX`]; the charts not tried count as not placed).
     unplaced_area_m2: f64,
-    /// 1 when a single-page trial stopped at a chart that did not fit, else 0.
+    /// Charts a single-page trial met and could not place (0: every chart placed).
     unplaced: usize,
     /// The largest, over charts, of the smallest page-size ratio any orientation needs.
     worst_size_ratio: f64,
@@ -484,6 +498,7 @@ impl Context<'_, '_> {
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let o = self.options;
         let [w, h] = self.page();
+        let order_area_m2: f64 = self.order.iter().map(|&j| self.prepared[j].area_m2).sum();
         let mut trial = Trial {
             texels_per_unit,
             placed: vec![None; self.charts.len()],
@@ -578,16 +593,22 @@ impl Context<'_, '_> {
                 }
                 None => {
                     // This density fails; what is left tells the search how much to shrink.
+                    // Hole filling goes on with the next charts ([`HOLE_SKIPS_MAX`]).
                     trial.unplaced += 1;
-                    trial.unplaced_area_m2 = self.prepared[i].area_m2
-                        + self
+                    trial.unplaced_area_m2 += self.prepared[i].area_m2;
+                    if !self.holes
+                        || trial.unplaced > HOLE_SKIPS_MAX
+                        || trial.unplaced_area_m2 > HOLE_SKIPS_AREA_FRACTION * order_area_m2
+                    {
+                        trial.unplaced_area_m2 += self
                             .order
                             .iter()
                             .skip_while(|&&j| j != i)
                             .skip(1)
                             .map(|&j| self.prepared[j].area_m2)
                             .sum::<f64>();
-                    break;
+                        break;
+                    }
                 }
             }
         }
@@ -659,7 +680,8 @@ fn unit(v: f64) -> f64 {
 /// search on log density: steps from the last trial's fill ratio until a density that fits and
 /// one that does not are known, then bisection; then the [`FIT_PROBES`] densities above the
 /// bracket, upwards until one does not fit ([`FitSearch`]). A failing trial stops at its first
-/// chart that does not fit, so it costs at most a full one. Deterministic; at most
+/// chart that does not fit (with hole filling, after [`HOLE_SKIPS_MAX`]), so it costs at most
+/// a full one. Deterministic; at most
 /// [`MAX_FIT_TRIALS`] + [`FIT_PROBES`] trials (+1 last-resort trial at a density where every
 /// chart is below a texel). The trials run one after another, each using every thread
 /// (footprints, horizon sides, hole-search orientations).

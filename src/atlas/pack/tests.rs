@@ -615,3 +615,78 @@ fn small_charts_fill_the_hole_of_a_ring_instead_of_growing_the_box() {
         }
     }
 }
+
+#[test]
+fn a_failing_hole_filling_trial_counts_only_the_charts_it_could_not_place() {
+    // Above the density that fits, a hole-filling trial goes on past the charts it cannot
+    // place: every chart is then placed or counted as not placed, and no more than the charts
+    // it met and skipped are counted; a horizon trial counts every chart from its first failure.
+    let charts = mixed_set(400, 9);
+    let borrowed = as_pack_charts(&charts);
+    let options = PackOptions::default();
+    let fit = pack_charts(&borrowed, &options, &mut go()).unwrap();
+    let prepared: Vec<place::PreparedChart> = borrowed
+        .iter()
+        .enumerate()
+        .map(|(i, c)| place::prepare_chart(i, c).unwrap())
+        .collect();
+    let mut order: Vec<usize> = (0..borrowed.len())
+        .filter(|&i| prepared[i].has_vertices)
+        .collect();
+    order.sort_by(|&a, &b| {
+        prepared[b]
+            .area_m2
+            .total_cmp(&prepared[a].area_m2)
+            .then(a.cmp(&b))
+    });
+    let total: f64 = order.iter().map(|&i| prepared[i].area_m2).sum();
+    let mut skipped_some = false;
+    for holes in [true, false] {
+        let ctx = Context {
+            charts: &borrowed,
+            prepared: &prepared,
+            order: &order,
+            options: &options,
+            trials: std::sync::atomic::AtomicU32::new(0),
+            holes,
+            scored: holes,
+        };
+        for grow in [1.02, 1.05, 1.10, 1.15, 1.20, 1.30] {
+            let mut quiet = |_: (usize, usize)| ControlFlow::Continue(());
+            let t = ctx
+                .run(
+                    fit.texels_per_unit * grow,
+                    false,
+                    &mut Steps::new(&mut quiet, 1),
+                )
+                .unwrap();
+            if t.unplaced == 0 {
+                continue;
+            }
+            let placed: f64 = order
+                .iter()
+                .filter(|&&i| t.placed[i].is_some())
+                .map(|&i| prepared[i].area_m2)
+                .sum();
+            let accounted = (placed + t.unplaced_area_m2 - total).abs() <= 1e-9 * total;
+            assert!(
+                accounted,
+                "holes {holes}: placed and not placed make up every chart"
+            );
+            let not_placed = order.iter().filter(|&&i| t.placed[i].is_none()).count();
+            if holes {
+                assert!(t.unplaced <= HOLE_SKIPS_MAX + 1, "{}", t.unplaced);
+                let stopped = t.unplaced > HOLE_SKIPS_MAX
+                    || t.unplaced_area_m2 > HOLE_SKIPS_AREA_FRACTION * total;
+                if !stopped {
+                    // It met every chart: only those it skipped are not placed.
+                    assert_eq!(not_placed, t.unplaced, "grow {grow}");
+                    skipped_some |= t.unplaced > 1;
+                }
+            } else {
+                assert_eq!(t.unplaced, 1, "a horizon trial stops at its first failure");
+            }
+        }
+    }
+    assert!(skipped_some, "no hole-filling trial went on past a failure");
+}
