@@ -222,16 +222,7 @@ pub fn pack_charts_from(
             .into_iter()
             .collect::<Result<Vec<_>, _>>()?
     };
-    // Largest first (lscm-2002 §4 step 2, isocharts-2004 §6 step 2); ties by index.
-    let mut order: Vec<usize> = (0..charts.len())
-        .filter(|&i| prepared[i].has_vertices)
-        .collect();
-    order.sort_by(|&a, &b| {
-        prepared[b]
-            .area_m2
-            .total_cmp(&prepared[a].area_m2)
-            .then(a.cmp(&b))
-    });
+    let order = largest_first(&prepared);
     let mut ctx = Context {
         charts,
         prepared: &prepared,
@@ -295,6 +286,21 @@ pub fn pack_charts_from(
         }
     }
     Ok(ctx.output(&trial))
+}
+
+/// The charts with vertices, largest area first (lscm-2002 §4 step 2, isocharts-2004 §6 step
+/// 2); ties by index.
+fn largest_first(prepared: &[place::PreparedChart]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..prepared.len())
+        .filter(|&i| prepared[i].has_vertices)
+        .collect();
+    order.sort_by(|&a, &b| {
+        prepared[b]
+            .area_m2
+            .total_cmp(&prepared[a].area_m2)
+            .then(a.cmp(&b))
+    });
+    order
 }
 
 /// The order of the packing with hole filling: largest padded bounding box first (ties by

@@ -630,15 +630,7 @@ fn a_failing_hole_filling_trial_counts_only_the_charts_it_could_not_place() {
         .enumerate()
         .map(|(i, c)| place::prepare_chart(i, c).unwrap())
         .collect();
-    let mut order: Vec<usize> = (0..borrowed.len())
-        .filter(|&i| prepared[i].has_vertices)
-        .collect();
-    order.sort_by(|&a, &b| {
-        prepared[b]
-            .area_m2
-            .total_cmp(&prepared[a].area_m2)
-            .then(a.cmp(&b))
-    });
+    let order = largest_first(&prepared);
     let total: f64 = order.iter().map(|&i| prepared[i].area_m2).sum();
     let mut skipped_some = false;
     for holes in [true, false] {

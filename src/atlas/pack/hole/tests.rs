@@ -26,6 +26,23 @@ fn striped_canvas(
 }
 use std::collections::BTreeSet;
 
+/// The maximal runs `(first, last)` of the `x` in `lo..=hi` where `fits(x)`, in order.
+fn maximal_runs(lo: i32, hi: i32, fits: impl Fn(i32) -> bool) -> Vec<(i32, i32)> {
+    let mut runs = Vec::new();
+    let mut x = lo;
+    while x <= hi {
+        if fits(x) {
+            let s = x;
+            while x < hi && fits(x + 1) {
+                x += 1;
+            }
+            runs.push((s, x));
+        }
+        x += 1;
+    }
+    runs
+}
+
 /// A row of `W` columns filled by random disjoint runs, checked after every run against a
 /// plain array: occupancy per column, the longest free run (columns outside `0..W` free, as
 /// on the canvas beyond the placed charts), and the positions at which random chart rows fit
@@ -74,20 +91,10 @@ fn a_row_agrees_with_a_plain_array() {
                 x = q + 2 + next(20);
             }
             let fits = |x: i32| (x + a..=x + b).all(free_in);
-            let mut expected = Vec::new();
-            for &(p, q) in &cands {
-                let mut x = p;
-                while x <= q {
-                    if fits(x) {
-                        let s = x;
-                        while x < q && fits(x + 1) {
-                            x += 1;
-                        }
-                        expected.push((s, x));
-                    }
-                    x += 1;
-                }
-            }
+            let expected: Vec<(i32, i32)> = cands
+                .iter()
+                .flat_map(|&(p, q)| maximal_runs(p, q, fits))
+                .collect();
             let mut got = Vec::new();
             row.fitting_positions(a, b, end, &cands, &mut got);
             assert_eq!(got, expected, "span {a}..={b} up to {end} in {cands:?}");
@@ -133,22 +140,11 @@ fn scan_row_finds_the_first_fit_of_a_brute_force() {
                 if got.is_some() {
                     // The candidates of `find` read every fitting position from `fit`: the
                     // maximal runs of fitting positions, in order.
-                    let mut want = Vec::new();
                     let fits = |x: i32| {
                         rows.iter()
                             .all(|&(r, a, b)| (x + a..=x + b).all(|c| free(c, y + r)))
                     };
-                    let mut x = x_lo;
-                    while x <= x_hi {
-                        if fits(x) {
-                            let s = x;
-                            while x < x_hi && fits(x + 1) {
-                                x += 1;
-                            }
-                            want.push((s, x));
-                        }
-                        x += 1;
-                    }
+                    let want = maximal_runs(x_lo, x_hi, fits);
                     assert_eq!(buffers.fit, want, "y {y} rows {rows:?}");
                 }
                 if got.is_some() {
