@@ -105,41 +105,8 @@ pub fn optimize_borders_with(
             face_chart[f.index()] = c as u32;
         }
     }
-    let normals: Vec<Option<[f64; 3]>> = mesh.faces().map(|f| mesh.face_normal(f)).collect();
     let area_m2: Vec<f64> = mesh.faces().map(|f| mesh.face_area_m2(f)).collect();
-    let d_ang = |h: crate::mesh::HalfedgeId| -> f64 {
-        let Some(o) = mesh.opposite(h) else {
-            return 0.0;
-        };
-        match (normals[mesh.face(h).index()], normals[mesh.face(o).index()]) {
-            (Some(a), Some(b)) => (1.0 - dot(a, b)).max(0.0),
-            _ => 0.0,
-        }
-    };
-    // avg(d_ang) over the glued edges (each once), for the paper's normalisation.
-    let (mut sum, mut count) = (0.0, 0usize);
-    for h in mesh.halfedges() {
-        if let Some(o) = mesh.opposite(h) {
-            if h < o {
-                sum += d_ang(h);
-                count += 1;
-            }
-        }
-    }
-    let avg_d_ang = if count > 0 && sum > 0.0 {
-        sum / count as f64
-    } else {
-        1.0
-    };
-    // The capacity of every glued half-edge, once (both halves get the same value).
-    let capacity: Vec<f64> = mesh
-        .halfedges()
-        .map(|h| {
-            let feature = features.is_some_and(|fs| fs.is_feature_edge(h) || fs.is_hard_edge(h));
-            let w = if feature { FEATURE_EDGE_WEIGHT } else { 1.0 };
-            mesh.edge_length_m(h) * w / (1.0 + d_ang(h) / avg_d_ang)
-        })
-        .collect();
+    let capacity = edge_capacities(mesh, features);
     let mut chart_area_m2: Vec<f64> = charts
         .iter()
         .map(|faces| faces.iter().map(|f| area_m2[f.index()]).sum())
@@ -374,6 +341,46 @@ pub fn optimize_borders_with(
         }
     }
     stats
+}
+
+/// The capacity of every half-edge (module doc: `length · (1 + d_ang / avg(d_ang))⁻¹ ·
+/// w_feature`), indexed by `HalfedgeId::index()`; both halves of a glued edge get the same
+/// value, a boundary half-edge its length times the feature weight. The cost of an edge as a
+/// border, also for `smooth.rs`. Cost: `O(F)`.
+pub(super) fn edge_capacities(mesh: &TriangleMesh, features: Option<&Features>) -> Vec<f64> {
+    let normals: Vec<Option<[f64; 3]>> = mesh.faces().map(|f| mesh.face_normal(f)).collect();
+    let d_ang = |h: crate::mesh::HalfedgeId| -> f64 {
+        let Some(o) = mesh.opposite(h) else {
+            return 0.0;
+        };
+        match (normals[mesh.face(h).index()], normals[mesh.face(o).index()]) {
+            (Some(a), Some(b)) => (1.0 - dot(a, b)).max(0.0),
+            _ => 0.0,
+        }
+    };
+    // avg(d_ang) over the glued edges (each once), for the paper's normalisation.
+    let (mut sum, mut count) = (0.0, 0usize);
+    for h in mesh.halfedges() {
+        if let Some(o) = mesh.opposite(h) {
+            if h < o {
+                sum += d_ang(h);
+                count += 1;
+            }
+        }
+    }
+    let avg_d_ang = if count > 0 && sum > 0.0 {
+        sum / count as f64
+    } else {
+        1.0
+    };
+    // The capacity of every glued half-edge, once (both halves get the same value).
+    mesh.halfedges()
+        .map(|h| {
+            let feature = features.is_some_and(|fs| fs.is_feature_edge(h) || fs.is_hard_edge(h));
+            let w = if feature { FEATURE_EDGE_WEIGHT } else { 1.0 };
+            mesh.edge_length_m(h) * w / (1.0 + d_ang(h) / avg_d_ang)
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -34,7 +34,10 @@
 //! [`grow`] (§3.2, Algorithm 2), [`spectral`] and [`geodesic`] (the stretch-driven method of
 //! Iso-charts §4–5), this file (the disk guarantee and the chart-count cap),
 //! [`graph_cut`] (opt-in: borders moved to a minimum cut, Iso-charts §5.2, between the disk
-//! guarantee and the cap; it keeps every chart a disk and the count unchanged). The
+//! guarantee and the cap; it keeps every chart a disk and the count unchanged), `smooth.rs`
+//! (always, after the graph cut and in every split of `grow_two`: single faces sticking out
+//! across a border, the saw teeth where growing fronts met, go to the chart they stick into;
+//! disks and the count kept). The
 //! next stage, `parameterize`, flattens the charts, splits the invalid ones and merges back
 //! (§3.3).
 //!
@@ -45,6 +48,7 @@ pub mod geodesic;
 pub mod graph_cut;
 pub mod grow;
 pub mod options;
+mod smooth;
 pub mod spectral;
 
 #[cfg(test)]
@@ -161,6 +165,8 @@ pub struct SegmentStats {
     pub spectral_rounds: usize,
     /// Pairs of adjacent charts whose border the graph cut moved (`graph_cut.rs`).
     pub borders_moved: usize,
+    /// Faces moved across a border by the smoothing (`smooth.rs`).
+    pub border_faces_moved: usize,
     /// `maxdist`, the largest distance to features, model units.
     pub max_distance_m: f64,
 }
@@ -294,6 +300,7 @@ pub fn segment_charts_with(
             graph_cut::optimize_borders(mesh, &mut charts, features.as_ref(), band_fraction);
         stats.borders_moved = moved.moved;
     }
+    stats.border_faces_moved = smooth_charts(mesh, &mut charts, features.as_ref());
     if let Some(cap) = options.max_charts {
         stats.cap_merges = merge_to_cap(
             mesh,
@@ -304,6 +311,58 @@ pub fn segment_charts_with(
     }
     checkpoint(progress.advance(total, total))?;
     Ok(finish(mesh, charts, stats))
+}
+
+/// Smooths the borders between `charts` (disks covering every face once; they still are, with
+/// the same count and order): `smooth.rs` with the graph cut's edge capacities, which make a
+/// border on a feature or a sharp edge cheap, so that smoothing keeps it there. Returns the
+/// number of faces moved.
+fn smooth_charts(
+    mesh: &TriangleMesh,
+    charts: &mut [Vec<FaceId>],
+    features: Option<&Features>,
+) -> usize {
+    if charts.len() < 2 {
+        return 0;
+    }
+    let mut label = vec![u32::MAX; mesh.num_faces()];
+    for (c, faces) in charts.iter().enumerate() {
+        for f in faces {
+            label[f.index()] = c as u32;
+        }
+    }
+    // Candidates: the faces on a border, in id order.
+    let candidates: Vec<FaceId> = mesh
+        .faces()
+        .filter(|&f| {
+            mesh.face_neighbors(f)
+                .into_iter()
+                .flatten()
+                .any(|g| label[g.index()] != label[f.index()])
+        })
+        .collect();
+    if candidates.is_empty() {
+        return 0;
+    }
+    let capacity = graph_cut::edge_capacities(mesh, features);
+    let mut sizes: Vec<usize> = charts.iter().map(Vec::len).collect();
+    let moved = smooth::smooth_borders(
+        mesh,
+        &mut smooth::DenseLabels(&mut label),
+        &|h| capacity[h.index()],
+        &candidates,
+        &[],
+        &mut sizes,
+    );
+    if moved > 0 {
+        for faces in charts.iter_mut() {
+            faces.clear();
+        }
+        for f in mesh.faces() {
+            charts[label[f.index()] as usize].push(f);
+        }
+    }
+    moved
 }
 
 /// The phases of [`segment_charts`] for progress: features, growing, the disk guarantee, the
@@ -663,8 +722,10 @@ pub(super) fn split_in_two(
 }
 
 /// Grows two charts from faces `a` and `b` of a connected chart, breadth-first and one layer at a
-/// time, so both parts are connected; `a == b` returns the chart whole and an empty part.
-/// Faces unreachable from `a` and `b` (only if the chart is disconnected) join part `a`.
+/// time, then smooths the border where the fronts met (`smooth.rs`: teeth move to the other part,
+/// `a` and `b` stay, each part keeps at least half of its faces), so both parts are connected;
+/// `a == b` returns the chart whole and an empty part. Faces unreachable from `a` and `b` (only
+/// if the chart is disconnected) join part `a`.
 pub(super) fn grow_two(
     mesh: &TriangleMesh,
     faces: &[FaceId],
@@ -722,6 +783,52 @@ pub(super) fn grow_two(
             }
         }
     }
+    // Smooth the border between the halves (`smooth.rs`), the seeds fixed. The cost is the edge
+    // length, a tenth of it on a hard edge (the segmentation's default hard-edge angle): this
+    // stage has no feature curves, and a split should still end on a crease where one is near.
+    let mut sizes = [0usize; 3];
+    for (i, &f) in sorted.iter().enumerate() {
+        sizes[usize::from(if dense { side[f.index()] } else { side[i] })] += 1;
+    }
+    sizes[0] = 0;
+    struct Sides<'a, S: Fn(FaceId) -> Option<usize>> {
+        side: &'a mut [u8],
+        slot: S,
+    }
+    impl<S: Fn(FaceId) -> Option<usize>> smooth::FaceLabels for Sides<'_, S> {
+        fn label(&self, f: FaceId) -> Option<u32> {
+            (self.slot)(f)
+                .map(|k| self.side[k])
+                .filter(|&s| s != 0)
+                .map(u32::from)
+        }
+        fn set(&mut self, f: FaceId, to: u32) {
+            if let Some(k) = (self.slot)(f) {
+                self.side[k] = to as u8;
+            }
+        }
+    }
+    smooth::smooth_borders(
+        mesh,
+        &mut Sides {
+            side: &mut side,
+            slot,
+        },
+        &|h| {
+            let hard = mesh
+                .dihedral_angle_rad(h)
+                .is_some_and(|angle| angle >= HARD_EDGE_ANGLE_RAD);
+            mesh.edge_length_m(h)
+                * if hard {
+                    graph_cut::FEATURE_EDGE_WEIGHT
+                } else {
+                    1.0
+                }
+        },
+        &sorted,
+        &[a, b],
+        &mut sizes,
+    );
     let side_of = |i: usize, f: FaceId| if dense { side[f.index()] } else { side[i] };
     let half_a: Vec<FaceId> = sorted
         .iter()
@@ -737,6 +844,10 @@ pub(super) fn grow_two(
         .collect();
     (half_a, half_b)
 }
+
+/// The dihedral angle from which the border smoothing of [`grow_two`] treats an edge as hard:
+/// the default of [`Lscm2002Options::hard_edge_angle_rad`].
+const HARD_EDGE_ANGLE_RAD: f64 = std::f64::consts::FRAC_PI_3;
 
 /// Merges adjacent charts, smallest chart first, while there are more than `cap` charts and the
 /// union is still a disk. Returns the number of merges. Cost: up to `O(charts · F)` disk checks.
