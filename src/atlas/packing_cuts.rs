@@ -25,9 +25,12 @@ const PACKING_CUT_ALL_MAX_CHARTS: usize = 8;
 /// again. Trade-off: a level costs one validation and packing of the mesh, paid only on the
 /// few-chart atlases below [`PACKING_CUT_BELOW`] whose single cuts did not pay.
 const PACKING_CUT_ALL_LEVELS: usize = 2;
-/// ... and only on atlases of at most this many packed charts: with many charts the shapes
-/// average out and a cut would not pay for its re-validation and re-packing.
-const PACKING_CUT_MAX_CHARTS: usize = 32;
+/// ... and only on atlases of at most this many packed charts. Many charts alone do not make a
+/// page pack well: PalmTree's 67 charts pack at 0.49 because two of them hold half the page,
+/// and one cut takes it to 0.67. Above this count a try's re-validation and re-packing cost
+/// too much. (The check packs the charts once, and that packing is the stage's own when no
+/// cut is kept, so an atlas that already packs well pays nothing.)
+const PACKING_CUT_MAX_CHARTS: usize = 256;
 /// ... and only on meshes of at most this many faces: the check alone packs the mesh once more,
 /// and each try validates and packs it again, which costs a large share of the pipeline on
 /// larger meshes, whose many charts pack well anyway.
