@@ -380,6 +380,49 @@ mod tests {
         }
     }
 
+    /// Faces glued to their chart by one edge whose two other edges meet one other chart: the
+    /// teeth of the module doc, counted from the face → chart map.
+    fn two_edge_teeth(mesh: &TriangleMesh, face_chart: &[u32]) -> usize {
+        mesh.faces()
+            .filter(|&f| {
+                let own = face_chart[f.index()];
+                let across: Vec<Option<u32>> = mesh
+                    .face_neighbors(f)
+                    .into_iter()
+                    .map(|g| g.map(|g| face_chart[g.index()]))
+                    .collect();
+                let glued = across.iter().filter(|&&l| l == Some(own)).count();
+                let others: Vec<u32> = across
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .filter(|&l| l != own)
+                    .collect();
+                glued == 1 && others.len() == 2 && others[0] == others[1]
+            })
+            .count()
+    }
+
+    #[test]
+    fn segmented_fixtures_have_no_teeth() {
+        for input in [
+            fixtures::torus(24, 12, 2.0, 0.5),
+            fixtures::uv_sphere(12, 24, 1.0),
+            subdivided_cube(5),
+            fixtures::cylinder_open(24, 12, 1.0, 3.0),
+        ] {
+            let mesh = build(&input);
+            let seg = crate::atlas::segment::tests::segment(&mesh);
+            let face_chart: Vec<u32> = seg.face_chart.as_slice().iter().map(|c| c.0).collect();
+            assert_eq!(
+                two_edge_teeth(&mesh, &face_chart),
+                0,
+                "{} faces",
+                mesh.num_faces()
+            );
+        }
+    }
+
     /// Jagged charts: breadth-first growth from `seeds` faces, popping the frontier in an order
     /// drawn from `draw`, then the disk guarantee.
     fn jagged_disks(
