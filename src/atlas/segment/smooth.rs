@@ -26,7 +26,8 @@
 //! label).
 //!
 //! Cost: one visit per candidate plus the three neighbours of each moved face, in a heap; each
-//! visit looks at the fans of at most two vertices. At most [`MAX_MOVES_PER_CANDIDATE`] moves per candidate.
+//! visit looks at the fans of at most two vertices. At most [`MAX_MOVES_PER_CANDIDATE`] moves
+//! per candidate.
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
