@@ -117,6 +117,9 @@ pub struct PipelineJson {
     pub segmentation: &'static str,
     /// Charts split by the stretch segmentation's spectral clustering (0 for `features`).
     pub spectral_splits: usize,
+    /// Faces the border smoothing moved into the chart they stuck into (saw teeth where growing
+    /// fronts met), at the end of segmentation; the smoothing of later splits is not counted.
+    pub border_faces_smoothed: usize,
     /// The stretch optimisation that ran on the charts' maps: `global` (the global L2 descent),
     /// `linf_l2` (the global descent, then Sander et al. 2001's vertex passes) or `none`.
     pub stretch_optimization: &'static str,
@@ -228,6 +231,7 @@ impl ReportJson {
                 degenerate_charts: s.degenerate_charts,
                 segmentation: s.segmentation.name(),
                 spectral_splits: s.spectral_splits,
+                border_faces_smoothed: s.border_faces_smoothed,
                 stretch_optimization: s.stretch_optimization.name(),
                 charts_stretch_optimized: s.stretch.charts_optimized,
                 stretch_vertex_moves: s.stretch.moves,

@@ -90,6 +90,9 @@ pub struct PipelineStats {
     pub segmentation: SegmentMethod,
     /// Charts split by the stretch segmentation's spectral clustering.
     pub spectral_splits: usize,
+    /// Faces the border smoothing moved into the chart they stuck into, at the end of
+    /// segmentation (`segment/smooth.rs`; the smoothing inside later splits is not counted).
+    pub border_faces_smoothed: usize,
     /// The stretch optimisation that ran on the final maps (`parameterize::stretch`).
     pub stretch_optimization: parameterize::StretchOptimization,
     /// What it did: charts optimised and skipped, vertex moves kept.
@@ -216,6 +219,7 @@ pub fn generate(
         packing_cuts,
         segmentation: options.segment.method,
         spectral_splits: seg.stats.spectral_splits,
+        border_faces_smoothed: seg.stats.border_faces_moved,
         stretch_optimization: options.parameterize.stretch_optimization,
         stretch: parameterized.stretch,
         parameterization: options.parameterize.parameterization,
