@@ -90,7 +90,8 @@ pub const FIT_TOLERANCE: f64 = 3e-3;
 /// trial costs up to a second on thousands of charts (2CylinderEngine), and near the largest
 /// density that fits, whether a trial fits is not monotone, so the last bisections of a 0.3%
 /// bracket mostly fail; at 1% the packing found may be up to 1% less dense (2% less
-/// efficient) for two bisections fewer.
+/// efficient). Measured: 2CylinderEngine's pack stage 6.8 → 5.5 s at the same packing, and
+/// the same packing on six more files that fill holes except spot (0.6139 → 0.6121).
 pub const HOLE_FIT_TOLERANCE: f64 = 1e-2;
 
 /// Densities tried above the bracket of [`TexelDensity::FitToPage`]: whether the charts fit is

@@ -786,32 +786,17 @@ pub(super) fn grow_two(
     // Smooth the border between the halves (`smooth.rs`), the seeds fixed. The cost is the edge
     // length, a tenth of it on a hard edge (the segmentation's default hard-edge angle): this
     // stage has no feature curves, and a split should still end on a crease where one is near.
+    // The side of the `i`-th sorted face `f`, read as the growth stored it.
+    let side_at = |side: &[u8], i: usize, f: FaceId| if dense { side[f.index()] } else { side[i] };
     let mut sizes = [0usize; 3];
     for (i, &f) in sorted.iter().enumerate() {
-        sizes[usize::from(if dense { side[f.index()] } else { side[i] })] += 1;
+        sizes[usize::from(side_at(&side, i, f))] += 1;
     }
     sizes[0] = 0;
-    struct Sides<'a, S: Fn(FaceId) -> Option<usize>> {
-        side: &'a mut [u8],
-        slot: S,
-    }
-    impl<S: Fn(FaceId) -> Option<usize>> smooth::FaceLabels for Sides<'_, S> {
-        fn label(&self, f: FaceId) -> Option<u32> {
-            (self.slot)(f)
-                .map(|k| self.side[k])
-                .filter(|&s| s != 0)
-                .map(u32::from)
-        }
-        fn set(&mut self, f: FaceId, to: u32) {
-            if let Some(k) = (self.slot)(f) {
-                self.side[k] = to as u8;
-            }
-        }
-    }
     smooth::smooth_borders(
         mesh,
-        &mut Sides {
-            side: &mut side,
+        &mut smooth::SlotLabels {
+            labels: &mut side,
             slot,
         },
         &|h| {
@@ -829,17 +814,16 @@ pub(super) fn grow_two(
         &[a, b],
         &mut sizes,
     );
-    let side_of = |i: usize, f: FaceId| if dense { side[f.index()] } else { side[i] };
     let half_a: Vec<FaceId> = sorted
         .iter()
         .enumerate()
-        .filter(|&(i, &f)| side_of(i, f) != 2)
+        .filter(|&(i, &f)| side_at(&side, i, f) != 2)
         .map(|(_, &f)| f)
         .collect();
     let half_b = sorted
         .iter()
         .enumerate()
-        .filter(|&(i, &f)| side_of(i, f) == 2)
+        .filter(|&(i, &f)| side_at(&side, i, f) == 2)
         .map(|(_, &f)| f)
         .collect();
     (half_a, half_b)

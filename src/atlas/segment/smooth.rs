@@ -63,6 +63,27 @@ impl FaceLabels for DenseLabels<'_> {
     }
 }
 
+/// Labels kept as `u8` at a slot of each face (`slot(f)`: `None` for a face outside the
+/// charts), `0` meaning no label: the two sides of a split in `grow_two`.
+pub(super) struct SlotLabels<'a, S: Fn(FaceId) -> Option<usize>> {
+    pub labels: &'a mut [u8],
+    pub slot: S,
+}
+
+impl<S: Fn(FaceId) -> Option<usize>> FaceLabels for SlotLabels<'_, S> {
+    fn label(&self, f: FaceId) -> Option<u32> {
+        (self.slot)(f)
+            .map(|k| self.labels[k])
+            .filter(|&l| l != 0)
+            .map(u32::from)
+    }
+    fn set(&mut self, f: FaceId, to: u32) {
+        if let (Some(k), Ok(to)) = ((self.slot)(f), u8::try_from(to)) {
+            self.labels[k] = to;
+        }
+    }
+}
+
 /// Moves teeth between charts (module doc) until none is left, starting from `candidates` and
 /// never moving a face of `pinned`. `cost` is the cost of an edge as a border, per half-edge
 /// (both halves of a glued edge equal). `sizes[l]` is the number of faces labelled `l`: a chart
