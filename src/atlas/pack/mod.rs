@@ -6,7 +6,8 @@
 //! chart to its diameter, trying the angles of [`chart_rotations`]), and places it with the horizon ("Tetris") packer of lscm-2002 §4,
 //! extended as isocharts-2004 §6 (insertion from four directions, 16 rotations), then writes
 //! normalized page UVs. Where the horizons leave much of the page empty (fit-to-page
-//! efficiency below [`HOLE_FILL_BELOW`], or a fixed density needing more than one page), the
+//! efficiency below [`HOLE_FILL_BELOW`] with many charts, [`HOLE_FILL_BELOW_FEW_CHARTS`] with
+//! few, or a fixed density needing more than one page), the
 //! charts are packed again with *hole filling* ([`hole`], an extension of the papers) and the
 //! better packing is kept: in the order of `padded_box_order` (largest padded UV box first),
 //! each chart goes to a position of the page where its padded footprint meets no placed
@@ -155,7 +156,8 @@ pub fn chart_rotations(
 /// [`hole_rotations`] ([`hole`]); fewer charts take the plain first fit with `rotations`.
 /// Trade-off: the scored search packs many charts tighter at about twice the cost (four times
 /// on the bunny's 15 charts); on few charts neither wins everywhere (bunny 0.618 plain against
-/// 0.625 scored, armadillo 0.635 against 0.627).
+/// 0.625 scored, armadillo 0.635 against 0.627). The same count decides how sparse the
+/// horizons' packing must be for hole filling to run ([`HOLE_FILL_BELOW`]).
 pub const HOLE_SCORED_MIN_CHARTS: usize = 33;
 /// A single-page trial with hole filling that meets a chart it cannot place goes on with the
 /// next charts until more than this many did not fit, or their area is above
@@ -256,7 +258,8 @@ pub fn pack_charts_from(
     };
     let mut trial = pack(&ctx, start, monitor)?;
     // Hole filling ([`hole`]) where the horizons leave much of the page empty: fit-to-page
-    // below `HOLE_FILL_BELOW`, or a fixed density that needs more than one page. The better
+    // below `HOLE_FILL_BELOW` (`HOLE_FILL_BELOW_FEW_CHARTS` with few charts), or a fixed
+    // density that needs more than one page. The better
     // packing is kept (higher density, or fewer pages; ties: the horizons').
     let total_area_m2: f64 = order.iter().map(|&i| prepared[i].area_m2).sum();
     let [w, h] = ctx.page();
@@ -264,7 +267,10 @@ pub fn pack_charts_from(
         total_area_m2 * t.texels_per_unit * t.texels_per_unit / (f64::from(w) * f64::from(h))
     };
     let sparse = match options.density {
-        TexelDensity::FitToPage => efficiency(&trial) < HOLE_FILL_BELOW,
+        TexelDensity::FitToPage if order.len() >= HOLE_SCORED_MIN_CHARTS => {
+            efficiency(&trial) < HOLE_FILL_BELOW
+        }
+        TexelDensity::FitToPage => efficiency(&trial) < HOLE_FILL_BELOW_FEW_CHARTS,
         TexelDensity::TexelsPerUnit(_) => trial.pages.len() > 1,
     };
     let hole_order;
@@ -353,14 +359,21 @@ fn padded_box_order(
 /// Fill ratio of the density of `padded_box_order`.
 pub const HOLE_ORDER_FILL: f64 = 0.55;
 
-/// Fit-to-page packings by the horizons alone whose efficiency (placed UV area / page area) is
-/// below this are packed again with hole filling ([`hole`]), keeping the better: issue 21's
-/// target for every mesh. Trade-off: where hole filling cannot beat the horizons its search
-/// stops after one trial (just above their density), where it can it costs up to twice the
-/// pack stage. Measured against 0.60: bunny 0.602 → 0.618 and MixedLightingExample 0.702 →
-/// 0.721 (6 more trials each); the other corpus files that now try it keep the horizons'
-/// packing for one more trial.
+/// Fit-to-page packings of at least [`HOLE_SCORED_MIN_CHARTS`] charts that the horizons alone
+/// pack below this efficiency (placed UV area / page area) are packed again with hole filling
+/// ([`hole`]), keeping the better: issue 21's target for every mesh. Fewer charts are packed
+/// again only below [`HOLE_FILL_BELOW_FEW_CHARTS`]. Trade-off: where hole filling cannot beat
+/// the horizons its search stops after one trial (just above their density), where it can it
+/// costs up to twice the pack stage. Measured against 0.60: beast_sub2_1M (248 charts) 0.656 →
+/// 0.769 and MixedLightingExample (68) 0.702 → 0.721, each for 6–8 more trials (beast's whole
+/// command +10%); PalmTree (68) keeps the horizons' packing for one more trial.
 pub const HOLE_FILL_BELOW: f64 = 0.72;
+
+/// [`HOLE_FILL_BELOW`] for packings of fewer than [`HOLE_SCORED_MIN_CHARTS`] charts. Trade-off:
+/// few large charts leave few holes that another chart fits; at 0.72, of the 10 corpus files
+/// with fewer charts that the horizons pack between 0.60 and 0.72, only the bunny gained
+/// (0.602 → 0.618, for +7.5% on its whole command), and the 11 others paid one more trial.
+pub const HOLE_FILL_BELOW_FEW_CHARTS: f64 = 0.60;
 
 impl PackOptions {
     /// Rejects meaningless values with [`PackError::InvalidOption`], naming the option and what
