@@ -265,11 +265,12 @@ pub fn generate(
             options,
             progress,
         )?;
-        let outcome = guard_uvs(mesh, &mut written.corner_uvs, &written.face_page);
+        let (outcome, check) = guard_uvs(mesh, &mut written.corner_uvs, &written.face_page);
         stats.uv_collapsed_faces += outcome.collapsed_faces;
         stats.uv_nudged_vertices += outcome.nudged_vertices;
         stats.uv_nudged_vertices += restore_slivers(
             mesh,
+            &check,
             &mut written.corner_uvs,
             &written.face_page,
             [options.pack.width_texels, options.pack.height_texels],

@@ -67,17 +67,18 @@ pub(super) struct GuardOutcome {
     pub unrepaired: Vec<FaceId>,
 }
 
-/// Repairs `corner_uvs` in place (module doc) and returns what it did and what is left.
+/// Repairs `corner_uvs` in place (module doc) and returns what it did and what is left, with
+/// the orientation check of `corner_uvs` as it leaves them (for the next step to reuse).
 /// `face_page[f]` is the page of face `f`; both have one entry per face of `mesh`.
 pub(super) fn guard_uvs(
     mesh: &TriangleMesh,
     corner_uvs: &mut [[[f32; 2]; 3]],
     face_page: &[u32],
-) -> GuardOutcome {
+) -> (GuardOutcome, OrientationCheck) {
     let mut out = GuardOutcome::default();
     let check = orientation_check(mesh, corner_uvs, face_page);
     if !(0..corner_uvs.len()).any(|f| check.fault(f)) {
-        return out;
+        return (out, check);
     }
     // 1. Collapse 3-D-degenerate faces with UV area (changes no other face).
     let shared = if (0..corner_uvs.len()).any(|f| check.degenerate_3d[f] && !check.uv_degenerate[f])
@@ -124,7 +125,7 @@ pub(super) fn guard_uvs(
         .filter(|&f| check.fault(f))
         .map(|f| FaceId(f as u32))
         .collect();
-    out
+    (out, check)
 }
 
 /// Collapses every face marked in `degenerate_3d` whose UV triangle has area; returns how many.

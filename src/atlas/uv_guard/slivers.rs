@@ -12,7 +12,7 @@
 //! far below a texel, inside the padding. Deterministic: faces in index order, points in a
 //! fixed order, strict improvement.
 use super::{f32_spacing, moves_fine, UvVertices};
-use crate::atlas::measure::{face_metric, orientation_check, OrientationCheck};
+use crate::atlas::measure::{face_metric, OrientationCheck};
 use crate::mesh::{FaceId, TriangleMesh};
 
 /// A face whose UV height (over its longest UV edge) is below this many texels has its shape
@@ -46,14 +46,15 @@ fn face_linf(mesh: &TriangleMesh, f: usize, uv: &[[f32; 2]; 3], k: f64) -> f64 {
 }
 
 /// Moves the apex of every thin face with a high L∞ (module doc); returns the UV vertices
-/// moved. `size = [W, H]` texels of a page.
+/// moved. `check` is `measure::orientation_check` of `corner_uvs` as they are on entry (the
+/// guard's last); `size = [W, H]` texels of a page.
 pub(in crate::atlas) fn restore_slivers(
     mesh: &TriangleMesh,
+    check: &OrientationCheck,
     corner_uvs: &mut [[[f32; 2]; 3]],
     face_page: &[u32],
     size: [u32; 2],
 ) -> usize {
-    let check = orientation_check(mesh, corner_uvs, face_page);
     let nf = corner_uvs.len();
     let used = |f: usize| !check.uv_degenerate[f] && !check.degenerate_3d[f];
     let (mut a2_sum, mut a3_sum) = (0.0f64, 0.0f64);
@@ -69,7 +70,7 @@ pub(in crate::atlas) fn restore_slivers(
     let mut vertices: Option<UvVertices> = None;
     let mut moved = 0;
     for f in (0..nf).filter(|&f| used(f) && !check.flipped(f)) {
-        let Some(apex) = thin_apex(mesh, &check, corner_uvs, f, k, texel) else {
+        let Some(apex) = thin_apex(mesh, check, corner_uvs, f, k, texel) else {
             continue;
         };
         let group = vertices
@@ -114,7 +115,7 @@ pub(in crate::atlas) fn restore_slivers(
                 }
                 let value = local_max(corner_uvs, p);
                 if value < best.map_or(before, |b| b.0)
-                    && moves_fine(&check, group, corner_uvs, p, usize::MAX)
+                    && moves_fine(check, group, corner_uvs, p, usize::MAX)
                 {
                     best = Some((value, p));
                 }
@@ -155,6 +156,7 @@ fn thin_apex(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::atlas::measure::orientation_check;
     use crate::atlas::segment::tests::build;
     use crate::mesh::MeshInput;
 
@@ -197,7 +199,8 @@ mod tests {
             before > 4.0,
             "the setup is a sliver with a high L∞: {before}"
         );
-        let moved = restore_slivers(&mesh, &mut uvs, &[0, 0], [64, 64]);
+        let check = orientation_check(&mesh, &uvs, &[0, 0]);
+        let moved = restore_slivers(&mesh, &check, &mut uvs, &[0, 0], [64, 64]);
         let after = face_linf(&mesh, 0, &uvs[0], k);
         assert_eq!(moved, 1);
         assert!(after < before / 2.0, "L∞ {before} -> {after}");
