@@ -370,7 +370,7 @@ pub const HOLE_ORDER_FILL: f64 = 0.55;
 pub const HOLE_FILL_BELOW: f64 = 0.72;
 
 /// [`HOLE_FILL_BELOW`] for packings of fewer than [`HOLE_SCORED_MIN_CHARTS`] charts. Trade-off:
-/// few large charts leave few holes that another chart fits; at 0.72, of the 10 corpus files
+/// few large charts leave few holes that another chart fits; at 0.72, of the 12 corpus files
 /// with fewer charts that the horizons pack between 0.60 and 0.72, only the bunny gained
 /// (0.602 → 0.618, for +7.5% on its whole command), and the 11 others paid one more trial.
 pub const HOLE_FILL_BELOW_FEW_CHARTS: f64 = 0.60;
