@@ -802,7 +802,7 @@ pub(super) fn grow_two(
         &|h| {
             let hard = mesh
                 .dihedral_angle_rad(h)
-                .is_some_and(|angle| angle >= HARD_EDGE_ANGLE_RAD);
+                .is_some_and(|angle| angle >= options::DEFAULT_HARD_EDGE_ANGLE_RAD);
             mesh.edge_length_m(h)
                 * if hard {
                     graph_cut::FEATURE_EDGE_WEIGHT
@@ -828,10 +828,6 @@ pub(super) fn grow_two(
         .collect();
     (half_a, half_b)
 }
-
-/// The dihedral angle from which the border smoothing of [`grow_two`] treats an edge as hard:
-/// the default of [`Lscm2002Options::hard_edge_angle_rad`].
-const HARD_EDGE_ANGLE_RAD: f64 = std::f64::consts::FRAC_PI_3;
 
 /// Merges adjacent charts, smallest chart first, while there are more than `cap` charts and the
 /// union is still a disk. Returns the number of merges. Cost: up to `O(charts · F)` disk checks.

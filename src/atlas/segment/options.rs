@@ -94,6 +94,10 @@ pub struct Lscm2002Options {
     pub hard_edge_angle_rad: Option<f64>,
 }
 
+/// The default of [`Lscm2002Options::hard_edge_angle_rad`] (60°), also the angle from which the
+/// border smoothing of a two-way split treats an edge as hard.
+pub const DEFAULT_HARD_EDGE_ANGLE_RAD: f64 = std::f64::consts::FRAC_PI_3;
+
 impl Default for Lscm2002Options {
     fn default() -> Self {
         Self {
@@ -101,7 +105,7 @@ impl Default for Lscm2002Options {
             max_string_length: 5,
             min_feature_length: 15,
             merge_epsilon_fraction: 0.25,
-            hard_edge_angle_rad: Some(std::f64::consts::FRAC_PI_3),
+            hard_edge_angle_rad: Some(DEFAULT_HARD_EDGE_ANGLE_RAD),
         }
     }
 }
