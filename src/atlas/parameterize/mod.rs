@@ -57,6 +57,7 @@ pub mod stretch;
 #[cfg(any(test, feature = "test-support"))]
 pub mod test_meshes;
 mod warm_start;
+pub use warm_start::restricted_map;
 
 #[cfg(test)]
 mod tests;

@@ -133,6 +133,43 @@ fn union_arc_agrees_with_the_disk_check_of_the_union() {
 }
 
 #[test]
+fn a_restricted_map_gives_every_vertex_of_the_part_its_parent_uv() {
+    // A 4 × 4 grid flattened as one chart; its left half keeps, vertex by vertex, the UVs of
+    // the whole map (a cut in UV space), in the numbering of its own chart mesh, and no face
+    // flips. Faces outside the parent are refused.
+    let mesh = build(&fixtures::grid(4, 4));
+    let all: Vec<FaceId> = (0..mesh.num_faces() as u32).map(FaceId).collect();
+    let (cm, global) = chart_mesh(&mesh, &all);
+    let map = flatten_chart(
+        &cm,
+        &FlattenOptions::default(),
+        &mut StageProgress::ignored(Stage::Parameterize),
+    )
+    .expect("flattens");
+    let uv_of = |v: crate::mesh::VertexId| map.uv[global.iter().position(|&g| g == v).unwrap()];
+    let parent: LocatedMap = (map.clone(), global.clone());
+    let half: Vec<FaceId> = all[..all.len() / 2].to_vec();
+    let (part, part_global) = restricted_map(&mesh, &half, &parent).expect("a part of the parent");
+    assert_eq!(part_global, chart_mesh(&mesh, &half).1);
+    assert_eq!(part.uv.len(), part_global.len());
+    for (l, &v) in part_global.iter().enumerate() {
+        assert_eq!(part.uv[l], uv_of(v), "vertex {v:?}");
+    }
+    assert!(part.is_valid(), "{:?}", part.flipped_faces);
+    // A parent that is only the first face does not hold the rest of the half.
+    let (small_cm, small_global) = chart_mesh(&mesh, &all[..1]);
+    let small: LocatedMap = (
+        ChartMap {
+            uv: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            ..map
+        },
+        small_global,
+    );
+    assert_eq!(small_cm.triangles.len(), 1);
+    assert!(restricted_map(&mesh, &half, &small).is_none());
+}
+
+#[test]
 fn chart_mesh_maps_local_to_global() {
     let mesh = build(&fixtures::grid(2, 2));
     let faces = [FaceId(5), FaceId(2)];
