@@ -52,6 +52,7 @@
 //! H.-Y. Shum, "Iso-charts", SGP 2004, §6.
 pub mod hole;
 pub mod horizon;
+mod one_page;
 pub mod place;
 pub mod raster;
 #[cfg(any(test, feature = "test-support"))]
@@ -71,6 +72,7 @@ pub mod outline;
 pub mod placement;
 mod types;
 
+pub use one_page::pack_one_page;
 pub use types::{PackChart, PackError, PackOptions, Packing, PlacedChart, TexelDensity};
 
 /// Largest page side accepted, texels (`width_texels`, `height_texels`): bounds the memory of
@@ -241,6 +243,7 @@ pub fn pack_charts_from(
         trials: std::sync::atomic::AtomicU32::new(0),
         holes: false,
         scored: false,
+        first_miss_stops: false,
     };
     let pack = |ctx: &Context<'_, '_>,
                 start: FitStart,
@@ -476,6 +479,9 @@ struct Context<'c, 'a> {
     /// With `holes`: whether the hole search scores candidates by contact and tries
     /// [`hole_rotations`] ([`HOLE_SCORED_MIN_CHARTS`]), or takes the plain first fit.
     scored: bool,
+    /// Whether a single-page trial stops at its first chart that does not fit, even with
+    /// `holes` (a yes-or-no test, [`pack_one_page`]).
+    first_miss_stops: bool,
 }
 
 /// Where one chart went in a trial.
@@ -627,6 +633,7 @@ impl Context<'_, '_> {
                     trial.unplaced += 1;
                     trial.unplaced_area_m2 += self.prepared[i].area_m2;
                     if !self.holes
+                        || self.first_miss_stops
                         || trial.unplaced > HOLE_SKIPS_MAX
                         || trial.unplaced_area_m2 > HOLE_SKIPS_AREA_FRACTION * order_area_m2
                     {

@@ -97,6 +97,37 @@ pub struct PreparedChart {
     pub loose: Vec<u32>,
 }
 
+/// The space a chart wastes in its minimum-area enclosing rectangle, model units²: the
+/// rectangle's area minus the chart's UV area, both at the chart's packing scale (UV area =
+/// 3-D area, as [`PreparedChart::unit_scale`] scales it). 0 for a chart with no UV area or a
+/// non-finite UV. Which charts a cut would help most: long arms and concave bays waste most.
+pub fn box_waste_m2(chart: &PackChart<'_>) -> f64 {
+    let Ok(prep) = prepare_chart(0, chart) else {
+        return 0.0;
+    };
+    if prep.unit_scale <= 0.0 {
+        return 0.0;
+    }
+    let s = prep.unit_scale;
+    let mut referenced = vec![false; chart.uv.len()];
+    for t in chart.triangles {
+        for &i in t {
+            referenced[i as usize] = true;
+        }
+    }
+    let points: Vec<[f64; 2]> = chart
+        .uv
+        .iter()
+        .zip(&referenced)
+        .filter(|(_, &r)| r)
+        .map(|(p, _)| [(p[0] - prep.centre[0]) * s, (p[1] - prep.centre[1]) * s])
+        .collect();
+    match min_area_box(&convex_hull(&points)) {
+        Some(b) => (b.along * b.across - chart.area_m2).max(0.0),
+        None => 0.0,
+    }
+}
+
 /// Validates a chart and computes its density-independent data.
 ///
 /// Errors: [`PackError::InvalidChart`] for a non-finite UV, a negative or non-finite area, or a

@@ -642,6 +642,7 @@ fn a_failing_hole_filling_trial_counts_only_the_charts_it_could_not_place() {
             trials: std::sync::atomic::AtomicU32::new(0),
             holes,
             scored: holes,
+            first_miss_stops: false,
         };
         for grow in [1.02, 1.05, 1.10, 1.15, 1.20, 1.30] {
             let mut quiet = |_: (usize, usize)| ControlFlow::Continue(());
@@ -681,4 +682,45 @@ fn a_failing_hole_filling_trial_counts_only_the_charts_it_could_not_place() {
         }
     }
     assert!(skipped_some, "no hole-filling trial went on past a failure");
+}
+
+#[test]
+fn one_page_at_a_fixed_density_is_packed_with_every_guarantee_or_refused() {
+    // Below the fit-to-page density every chart fits one page, with every guarantee and at
+    // exactly that density; far above it nothing fits and the answer is None.
+    let charts = mixed_set(40, 5);
+    let borrowed = as_pack_charts(&charts);
+    let options = PackOptions::default();
+    let fit = pack_charts(&borrowed, &options, &mut go()).unwrap();
+    let below = fit.texels_per_unit * 0.9;
+    let packing = pack_one_page(&borrowed, &options, below)
+        .unwrap()
+        .expect("one page holds the charts below the fit-to-page density");
+    assert_eq!(packing.num_pages, 1);
+    assert_eq!(packing.texels_per_unit, below);
+    let fixed = PackOptions {
+        density: TexelDensity::TexelsPerUnit(below),
+        ..options
+    };
+    assert_guarantees(&check_packing(&borrowed, &packing, &fixed), "one page");
+    let far_above = fit.texels_per_unit * 2.0;
+    assert!(pack_one_page(&borrowed, &options, far_above)
+        .unwrap()
+        .is_none());
+}
+
+#[test]
+fn box_waste_is_the_empty_part_of_the_minimum_area_rectangle() {
+    // A rectangle wastes nothing; an L of two unit-wide arms 4 long (area 7) lies in a 4 × 4
+    // square whatever the scale, so it wastes 9 of the 16 at the scale where UV area = 3-D area.
+    let rect = strip(8.0, 2.0, 8, 0.0);
+    assert!(place::box_waste_m2(&rect.as_pack_chart()).abs() < 1e-6 * rect.area_m2);
+    let l = l_shape(4.0, 1.0);
+    let waste = place::box_waste_m2(&l.as_pack_chart());
+    let expected = l.area_m2 * 9.0 / 7.0;
+    assert!(
+        (waste - expected).abs() < 1e-6 * expected,
+        "waste {waste}, expected {expected} (area {})",
+        l.area_m2
+    );
 }

@@ -1,0 +1,69 @@
+//! One page at a fixed density, as a yes-or-no test with its packing: the packing-aware cuts'
+//! cheap test of a candidate before a full density search.
+use std::ops::ControlFlow;
+
+use super::{
+    largest_first, padded_box_order, place, Context, PackChart, PackError, PackOptions, Packing,
+    Steps, TexelDensity, HOLE_SCORED_MIN_CHARTS,
+};
+
+/// One page at the fixed density `texels_per_unit`, if it holds every chart: the horizons'
+/// packing, else the packing with hole filling (the searches of one trial of the fit-to-page
+/// density search, [`super::pack_charts`]; `options.density` is ignored). `Ok(None)` when neither
+/// places every chart. A cheaper test than [`super::pack_charts`] at that density, which opens more
+/// pages for what does not fit: a failing horizon packing stops at its first chart that does
+/// not fit. Same guarantees as [`super::pack_charts`] for the packing returned.
+///
+/// Errors: [`PackError::InvalidOption`], [`PackError::InvalidChart`].
+pub fn pack_one_page(
+    charts: &[PackChart<'_>],
+    options: &PackOptions,
+    texels_per_unit: f64,
+) -> Result<Option<Packing>, PackError> {
+    let options = &PackOptions {
+        density: TexelDensity::TexelsPerUnit(texels_per_unit),
+        ..*options
+    };
+    options.check()?;
+    let prepared = {
+        use rayon::prelude::*;
+        charts
+            .par_iter()
+            .enumerate()
+            .map(|(i, c)| place::prepare_chart(i, c))
+            .collect::<Vec<_>>()
+            .into_iter()
+            .collect::<Result<Vec<_>, _>>()?
+    };
+    let order = largest_first(&prepared);
+    let mut ctx = Context {
+        charts,
+        prepared: &prepared,
+        order: &order,
+        options,
+        trials: std::sync::atomic::AtomicU32::new(0),
+        holes: false,
+        scored: false,
+        first_miss_stops: true,
+    };
+    let mut ignore = |_: (usize, usize)| ControlFlow::Continue(());
+    let t = ctx.run(
+        texels_per_unit,
+        false,
+        &mut Steps::new(&mut ignore, order.len()),
+    )?;
+    if t.unplaced == 0 {
+        return Ok(Some(ctx.output(&t)));
+    }
+    let total_area_m2: f64 = order.iter().map(|&i| prepared[i].area_m2).sum();
+    let hole_order = padded_box_order(charts, &prepared, &order, options, total_area_m2);
+    ctx.holes = true;
+    ctx.scored = order.len() >= HOLE_SCORED_MIN_CHARTS;
+    ctx.order = &hole_order;
+    let t = ctx.run(
+        texels_per_unit,
+        false,
+        &mut Steps::new(&mut ignore, order.len()),
+    )?;
+    Ok((t.unplaced == 0).then(|| ctx.output(&t)))
+}
