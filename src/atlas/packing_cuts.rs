@@ -1,57 +1,80 @@
 //! Packing-aware cuts: a feedback loop from the pack stage into segmentation and validation.
 //!
 //! It runs at the start of the pack stage (its packing is the stage's packing when no cut is
-//! kept), without a cancel checkpoint of its own: it is bounded to a few validations and
-//! packings of a mesh of at most [`PACKING_CUT_MAX_FACES`] faces. Deterministic.
+//! kept), without a cancel checkpoint of its own: it is bounded to a few packings (and on
+//! low-poly meshes validations) of a mesh of at most [`PACKING_CUT_MAX_FACES`] faces.
+//! Deterministic.
 
 use super::error::AtlasError;
 use super::options::AtlasOptions;
-use super::pack::{pack_charts, pack_charts_from, PackError, PackOptions, Packing, TexelDensity};
+use super::pack::place::box_waste_m2;
+use super::pack::{pack_charts_from, pack_one_page, PackChart, Packing, TexelDensity};
 use super::pack_input::{pack_charts_of, pack_inputs};
 use super::parameterize;
 use super::progress::{Stage, StageProgress};
 use super::segment;
-use crate::mesh::TriangleMesh;
+use crate::mesh::{FaceId, TriangleMesh};
 
 /// `cut_for_packing` tries cuts only while the estimated packing efficiency is below this
-/// (the packing target is 0.60, plus a margin for the estimate). Trade-off: a higher threshold
-/// cuts atlases that already pack well into many more charts for little gain.
-const PACKING_CUT_BELOW: f64 = 0.61;
+/// (issue 21's target for every mesh). Trade-off: each try costs one packing, and a kept cut a
+/// density search; a higher threshold cuts atlases that already pack well into more charts
+/// for little gain.
+const PACKING_CUT_BELOW: f64 = 0.72;
+/// [`PACKING_CUT_BELOW`] on meshes of at most [`LOW_POLY_MAX_FACES`] faces. Six equal squares
+/// fill at most 2/3 of a square page, so a cube cannot reach 0.72 with one chart per side;
+/// going past that bound means cutting flat sides apart (a 12-triangle cube came out as 8
+/// charts at 0.80), which no artist wants.
+const PACKING_CUT_BELOW_LOW_POLY: f64 = 0.61;
+/// The meshes of [`PACKING_CUT_BELOW_LOW_POLY`], whose cut parts are flattened again instead of
+/// keeping their parent's map: a box's cross-shaped chart cut in two gives rectangles when
+/// flattened again (Box: 0.695, against 0.629 with the parent's map cut).
+const LOW_POLY_MAX_FACES: usize = 100;
 /// The last resort of `cut_for_packing` (every chart cut at once) runs only on atlases of at
 /// most this many charts: it doubles the seams, which pays on a tube of 4 strips, not on 20
 /// charts of a scan.
 const PACKING_CUT_ALL_MAX_CHARTS: usize = 8;
 /// Levels of the last resort of `cut_for_packing`: every chart cut at once, then every piece
-/// again. Trade-off: a level costs one validation and packing of the mesh, paid only on the
-/// few-chart atlases below [`PACKING_CUT_BELOW`] whose single cuts did not pay.
+/// again (the parts flattened again). Trade-off: a level costs one validation and packing of
+/// the mesh, paid only on the few-chart atlases below the threshold whose single cuts did not
+/// pay.
 const PACKING_CUT_ALL_LEVELS: usize = 2;
 /// ... and only on atlases of at most this many packed charts. Many charts alone do not make a
 /// page pack well: PalmTree's 67 charts pack at 0.49 because two of them hold half the page,
-/// and one cut takes it to 0.67. Above this count a try's re-validation and re-packing cost
-/// too much. (The check packs the charts once, and that packing is the stage's own when no
+/// and one cut takes it to 0.67. Above this count a try's packing costs too much. (The check packs the charts once, and that packing is the stage's own when no
 /// cut is kept, so an atlas that already packs well pays nothing.)
 const PACKING_CUT_MAX_CHARTS: usize = 256;
-/// ... and only on meshes of at most this many faces: the check alone packs the mesh once more,
-/// and each try validates and packs it again, which costs a large share of the pipeline on
-/// larger meshes, whose many charts pack well anyway.
+/// ... and only on meshes of at most this many faces. Trade-off: the packings of large charts
+/// cost more (more texels, more outline triangles) and a try packs once, a kept cut a density
+/// search more. On the bunny (69k faces) the cuts took its packing 0.602 → 0.645 (2 cuts) and
+/// its pack stage 0.17 → 0.59 s, past issue 22's 0.6 s for its whole pipeline; armadillo
+/// (86k) 0.635 → 0.655 for 0.28 → 0.60 s.
 const PACKING_CUT_MAX_FACES: usize = 20_000;
 /// A cut is kept only when it raises the estimated efficiency by at least this (absolute):
 /// every seam costs texture continuity and gutter, so a marginal gain is not worth one.
 const PACKING_CUT_MIN_GAIN: f64 = 0.02;
-/// At most this many tries (each a validation and a packing of the whole mesh).
+/// At most this many single-chart tries (each a packing of the whole mesh; on low-poly meshes
+/// also a validation).
 const PACKING_CUT_MAX_TRIES: usize = 4;
 
-/// Packing-aware cuts (packing target 0.60): when the atlas has few charts and packs
-/// poorly (a strip or a disc wastes most of a square page), the largest-area chart is cut in two
-/// from the ends of a diameter of its face graph (`segment::split_in_two`, then the disk
-/// guarantee), the mesh is validated again with the cut (no merge-back, so the halves stay
-/// apart) and packed, and the cut is kept when the estimated efficiency (Σ chart area × density²
-/// over the page area: the packer places each chart at exactly that UV area) rises by at least
-/// [`PACKING_CUT_MIN_GAIN`]; otherwise the next largest chart is tried, up to
-/// [`PACKING_CUT_MAX_TRIES`] tries; when no single cut paid and there are at most
-/// [`PACKING_CUT_ALL_MAX_CHARTS`] charts, every chart is cut at once (then every piece again, up to [`PACKING_CUT_ALL_LEVELS`] levels), the last tries. Only with [`TexelDensity::FitToPage`] (an explicit density
-/// does not change with the cut). Deterministic (every step is). Returns the charts to use and the
-/// number of cuts kept.
+/// Packing-aware cuts (issue 21's packing target, 0.72; 0.61 on low-poly meshes): when the
+/// atlas has few charts and packs poorly (a strip, a disc or a chart with long arms wastes
+/// much of a square page), the chart that wastes the most space in its minimum-area rectangle
+/// (`pack::place::box_waste_m2`) is cut in two from the ends of a diameter of its face graph
+/// (`segment::split_in_two`, then the disk guarantee). Each part keeps its parent's map
+/// restricted to it (a cut in UV space: every face keeps its UV image, so flips, overlaps and
+/// each face's distortion are unchanged, and nothing is flattened); on low-poly meshes
+/// ([`LOW_POLY_MAX_FACES`]) the mesh is validated again with the cut instead (no merge-back,
+/// so the parts stay apart). The charts are packed, and the cut is kept when the estimated
+/// efficiency (Σ chart area × density² over the page area: the packer places each chart at
+/// exactly that UV area) rises by at least [`PACKING_CUT_MIN_GAIN`]: first one packing at the
+/// density of that gain ([`pack_one_page`]), then, when it fits, the full density search (the
+/// better of the two is kept: the search is not monotone). Otherwise the chart wasting the
+/// next most is tried, up to [`PACKING_CUT_MAX_TRIES`] tries; when no single cut paid and
+/// there are at most [`PACKING_CUT_ALL_MAX_CHARTS`] charts, every chart is cut at once and
+/// validated again (then every piece again, up to [`PACKING_CUT_ALL_LEVELS`] levels), the
+/// last tries. Only with [`TexelDensity::FitToPage`] (an explicit density does not change
+/// with the cut). Deterministic (every step is). Returns the charts to use, the number of
+/// cuts kept and the packing of those charts.
 pub(super) fn cut_for_packing(
     mesh: &TriangleMesh,
     validated: parameterize::ParameterizedCharts,
@@ -61,6 +84,12 @@ pub(super) fn cut_for_packing(
         return Ok((validated, 0, None));
     }
     let page = f64::from(options.pack.width_texels) * f64::from(options.pack.height_texels);
+    let low_poly = mesh.num_faces() <= LOW_POLY_MAX_FACES;
+    let below = if low_poly {
+        PACKING_CUT_BELOW_LOW_POLY
+    } else {
+        PACKING_CUT_BELOW
+    };
     // The charts of `v` to pack (not degenerate) and their total 3-D area.
     let packed_of = |inputs: &super::pack_input::PackInputs| -> (Vec<usize>, f64) {
         let packed: Vec<usize> = (0..inputs.degenerate.len())
@@ -97,96 +126,143 @@ pub(super) fn cut_for_packing(
     // The density at which `v`'s charts would pack at efficiency `goal`, when one page holds
     // them there (one packing at that fixed density, two when the horizons need a second page:
     // a cheap test before the full search of `estimate`).
-    let fits_at =
-        |v: &parameterize::ParameterizedCharts, goal: f64| -> Result<Option<f64>, AtlasError> {
-            let inputs = pack_inputs(mesh, v)?;
-            let (packed, total) = packed_of(&inputs);
-            if packed.is_empty() || total.is_nan() || total <= 0.0 {
-                return Ok(None);
-            }
-            let density = (goal * page / total).sqrt();
-            let input = pack_charts_of(v, &packed, &inputs.triangles, &inputs.area_m2);
-            let fixed = PackOptions {
-                density: TexelDensity::TexelsPerUnit(density),
-                ..options.pack
-            };
-            match pack_charts(&input, &fixed, &mut StageProgress::ignored(Stage::Pack)) {
-                Ok(p) if p.num_pages == 1 => Ok(Some(density)),
-                Ok(_) | Err(PackError::ChartTooLarge { .. }) => Ok(None),
-                Err(e) => Err(e.into()),
-            }
-        };
+    let fits_at = |v: &parameterize::ParameterizedCharts,
+                   goal: f64|
+     -> Result<Option<(f64, Packing)>, AtlasError> {
+        let inputs = pack_inputs(mesh, v)?;
+        let (packed, total) = packed_of(&inputs);
+        if packed.is_empty() || total.is_nan() || total <= 0.0 {
+            return Ok(None);
+        }
+        let density = (goal * page / total).sqrt();
+        let input = pack_charts_of(v, &packed, &inputs.triangles, &inputs.area_m2);
+        Ok(pack_one_page(&input, &options.pack, density)?.map(|p| (density, p)))
+    };
     // A candidate's efficiency and packing when they beat `best` by `PACKING_CUT_MIN_GAIN`: the
     // full search runs only when the candidate fits at the efficiency that would keep it.
     let try_candidate = |v: &parameterize::ParameterizedCharts,
                          best: f64|
      -> Result<Option<(f64, Option<Packing>)>, AtlasError> {
         let goal = best + PACKING_CUT_MIN_GAIN;
-        let Some(density) = fits_at(v, goal)? else {
+        let Some((density, fixed)) = fits_at(v, goal)? else {
             return Ok(None);
         };
         let (eff, _, packing) = estimate(v, Some(density))?;
-        Ok((eff >= goal).then_some((eff, packing)))
+        // The search is not monotone: it can end below a density already shown to fit.
+        Ok(Some(if eff >= goal {
+            (eff, packing)
+        } else {
+            (goal, Some(fixed))
+        }))
     };
     let (mut best, n, mut best_packing) = estimate(&validated, None)?;
-    if n == 0 || n > PACKING_CUT_MAX_CHARTS || best >= PACKING_CUT_BELOW {
+    if n == 0 || n > PACKING_CUT_MAX_CHARTS || best >= below {
         return Ok((validated, 0, best_packing));
     }
     let mut current = validated;
     let mut cuts = 0;
-    let mut tried: Vec<Vec<crate::mesh::FaceId>> = Vec::new();
+    let mut tried: Vec<Vec<FaceId>> = Vec::new();
+    // `current` with the charts `picks` each cut in two (then made disks), every part keeping
+    // its parent's map restricted to it: a cut in UV space, no flattening. Every face keeps its
+    // UV image, so flips, overlaps and each face's distortion are those of `current`; only the
+    // packing changes (each part is scaled to its own area, which can only lower the spread of
+    // texel density). Charts listed in `unresolved` are never picked, so their indices follow
+    // their first face.
     let validate_options = parameterize::ParameterizeOptions {
         merge_passes: 0,
         ..options.parameterize
     };
-    // `current` with the charts `picks` each cut in two, validated again.
     let cut = |current: &parameterize::ParameterizedCharts,
-               picks: &[usize]|
+               picks: &[usize],
+               flatten: bool|
      -> Result<parameterize::ParameterizedCharts, AtlasError> {
         let charts = &current.segmentation.charts;
         let mut stats = current.segmentation.stats;
-        let mut proposed: Vec<Vec<crate::mesh::FaceId>> = Vec::new();
+        let mut parts: Vec<(Vec<FaceId>, Option<parameterize::LocatedMap>)> = Vec::new();
         for (i, faces) in charts.iter().enumerate() {
-            if !picks.contains(&i) {
-                proposed.push(faces.clone());
+            let parent = current.maps[i].as_ref();
+            let unresolved = current.unresolved.iter().any(|(c, _)| *c == i);
+            if !picks.contains(&i) || parent.is_none() || unresolved {
+                parts.push((faces.clone(), parent.cloned()));
                 continue;
             }
-            let inside = |f: crate::mesh::FaceId| faces.binary_search(&f).is_ok();
+            let inside = |f: FaceId| faces.binary_search(&f).is_ok();
             let (a, b) = segment::split_in_two(mesh, faces, &inside);
-            proposed.extend(segment::enforce_disks(mesh, vec![a, b], &mut stats));
+            for mut part in segment::enforce_disks(mesh, vec![a, b], &mut stats) {
+                part.sort_unstable();
+                let map = parent.and_then(|p| parameterize::restricted_map(mesh, &part, p));
+                parts.push((part, map));
+            }
         }
-        let seg = segment::finish(mesh, proposed, stats);
-        Ok(parameterize::parameterize_charts(
-            mesh,
-            &seg,
-            &validate_options,
-            &mut StageProgress::ignored(Stage::Parameterize),
-        )?)
+        parts.retain(|(faces, _)| !faces.is_empty());
+        // `segment::finish`'s order (by lowest face), so that the maps stay aligned.
+        parts.sort_unstable_by_key(|(faces, _)| faces[0]);
+        let (proposed, maps): (Vec<_>, Vec<_>) = parts.into_iter().unzip();
+        let segmentation = segment::finish(mesh, proposed, stats);
+        if flatten {
+            return Ok(parameterize::parameterize_charts(
+                mesh,
+                &segmentation,
+                &validate_options,
+                &mut StageProgress::ignored(Stage::Parameterize),
+            )?);
+        }
+        debug_assert_eq!(segmentation.charts.len(), maps.len());
+        let unresolved = current
+            .unresolved
+            .iter()
+            .map(|(c, defect)| {
+                let first = charts[*c][0];
+                (segmentation.face_chart[first].index(), defect.clone())
+            })
+            .collect();
+        Ok(parameterize::ParameterizedCharts {
+            segmentation,
+            maps,
+            unresolved,
+            splits: current.splits,
+            degenerate_splits: current.degenerate_splits,
+            degenerate_faces: current.degenerate_faces,
+            merges: current.merges,
+            stretch: current.stretch,
+            asp: current.asp,
+        })
     };
-    let area = |c: &[crate::mesh::FaceId]| -> f64 { c.iter().map(|&f| mesh.face_area_m2(f)).sum() };
+    // Each chart's waste in its minimum-area rectangle (`pack::place::box_waste_m2`).
+    let wastes = |v: &parameterize::ParameterizedCharts| -> Result<Vec<f64>, AtlasError> {
+        let inputs = pack_inputs(mesh, v)?;
+        Ok((0..v.segmentation.charts.len())
+            .map(|i| match &v.maps[i] {
+                Some((map, _)) if !inputs.degenerate[i] => box_waste_m2(&PackChart {
+                    uv: &map.uv,
+                    triangles: &inputs.triangles[i],
+                    area_m2: inputs.area_m2[i],
+                }),
+                _ => 0.0,
+            })
+            .collect())
+    };
+    let mut waste = wastes(&current)?;
     for _ in 0..PACKING_CUT_MAX_TRIES {
-        if best >= PACKING_CUT_BELOW {
+        if best >= below {
             break;
         }
-        // The largest-area chart of at least 2 faces not tried yet.
+        // The chart of at least 2 faces not tried yet that wastes the most space.
         let charts = &current.segmentation.charts;
         let Some(pick) = (0..charts.len())
             .filter(|&i| charts[i].len() >= 2 && !tried.contains(&charts[i]))
-            .max_by(|&a, &b| {
-                area(&charts[a])
-                    .total_cmp(&area(&charts[b]))
-                    .then(b.cmp(&a))
-            })
+            .max_by(|&a, &b| waste[a].total_cmp(&waste[b]).then(b.cmp(&a)))
         else {
             break;
         };
         tried.push(charts[pick].clone());
-        let candidate = cut(&current, &[pick])?;
+        let candidate = cut(&current, &[pick], low_poly)?;
         if let Some((eff, packing)) = try_candidate(&candidate, best)? {
             best = eff;
             best_packing = packing;
             cuts += 1;
             current = candidate;
+            waste = wastes(&current)?;
             tried.clear();
         }
     }
@@ -194,7 +270,7 @@ pub(super) fn cut_for_packing(
     // irregular set): the last tries cut every chart of at least 2 faces at once, and when that
     // does not pay either, every piece once more, up to `PACKING_CUT_ALL_LEVELS` levels (a 2:1
     // rectangle cut into two squares packs no better on a square page; its quarters do).
-    if cuts == 0 && best < PACKING_CUT_BELOW && n <= PACKING_CUT_ALL_MAX_CHARTS {
+    if cuts == 0 && best < below && n <= PACKING_CUT_ALL_MAX_CHARTS {
         let mut level: Option<(parameterize::ParameterizedCharts, usize)> = None;
         for _ in 0..PACKING_CUT_ALL_LEVELS {
             let (base, cut_before) = match &level {
@@ -208,7 +284,7 @@ pub(super) fn cut_for_packing(
             if picks.is_empty() {
                 break;
             }
-            let candidate = cut(base, &picks)?;
+            let candidate = cut(base, &picks, true)?;
             let cut_now = cut_before + picks.len();
             if let Some((_, packing)) = try_candidate(&candidate, best)? {
                 cuts = cut_now;
