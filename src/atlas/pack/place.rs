@@ -128,6 +128,79 @@ pub fn box_waste_m2(chart: &PackChart<'_>) -> f64 {
     }
 }
 
+/// A cut of a chart across its narrowest part: `Some(side)` with `side[t]` true for the
+/// triangles on the far side, or `None` for a chart without UV area or with one side empty.
+/// The line runs across the long side of the chart's minimum-area rectangle, where the UV area
+/// of the triangles whose centroids lie within a slice along that side is least (the neck of a
+/// dumbbell, the root of an arm), among [`NECK_SLICES`] slices in the middle
+/// [`NECK_MIDDLE`] of the rectangle (ties to the slice nearest the middle); triangles go to the
+/// side of their centroid. The sides need not be connected: the caller makes disks of them.
+pub fn neck_cut(chart: &PackChart<'_>) -> Option<Vec<bool>> {
+    let area = |t: &[u32; 3]| {
+        let [a, b, c] = t.map(|i| chart.uv[i as usize]);
+        0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs()
+    };
+    let points: Vec<[f64; 2]> = chart
+        .triangles
+        .iter()
+        .flat_map(|t| t.iter().map(|&i| chart.uv[i as usize]))
+        .collect();
+    if points
+        .iter()
+        .any(|p| !(p[0].is_finite() && p[1].is_finite()))
+    {
+        return None;
+    }
+    let b = min_area_box(&convex_hull(&points))?;
+    let axis = if b.along >= b.across {
+        b.dir
+    } else {
+        [-b.dir[1], b.dir[0]]
+    };
+    let s: Vec<f64> = chart
+        .triangles
+        .iter()
+        .map(|t| {
+            let c = t.iter().fold([0.0, 0.0], |acc, &i| {
+                let p = chart.uv[i as usize];
+                [acc[0] + p[0] / 3.0, acc[1] + p[1] / 3.0]
+            });
+            c[0] * axis[0] + c[1] * axis[1]
+        })
+        .collect();
+    let lo = points
+        .iter()
+        .map(|p| p[0] * axis[0] + p[1] * axis[1])
+        .fold(f64::INFINITY, f64::min);
+    let len = b.along.max(b.across);
+    if !(len > 0.0 && len.is_finite()) {
+        return None;
+    }
+    let mut slices = vec![0.0; NECK_SLICES];
+    for (t, &x) in chart.triangles.iter().zip(&s) {
+        let k = (((x - lo) / len) * NECK_SLICES as f64).floor();
+        slices[(k.max(0.0) as usize).min(NECK_SLICES - 1)] += area(t);
+    }
+    let margin = ((1.0 - NECK_MIDDLE) / 2.0 * NECK_SLICES as f64).round() as usize;
+    let middle = NECK_SLICES as f64 / 2.0;
+    let k = (margin..NECK_SLICES - margin).min_by(|&a, &b| {
+        slices[a].total_cmp(&slices[b]).then(
+            (a as f64 + 0.5 - middle)
+                .abs()
+                .total_cmp(&(b as f64 + 0.5 - middle).abs()),
+        )
+    })?;
+    let cut = lo + len * (k as f64 + 0.5) / NECK_SLICES as f64;
+    let side: Vec<bool> = s.iter().map(|&x| x > cut).collect();
+    (side.iter().any(|&v| v) && side.iter().any(|&v| !v)).then_some(side)
+}
+
+/// Slices of [`neck_cut`] along the chart's long side.
+pub const NECK_SLICES: usize = 32;
+/// The share of the long side, centred, in which [`neck_cut`] looks for the neck: cuts nearer
+/// an end only trim a tip.
+pub const NECK_MIDDLE: f64 = 0.7;
+
 /// Validates a chart and computes its density-independent data.
 ///
 /// Errors: [`PackError::InvalidChart`] for a non-finite UV, a negative or non-finite area, or a

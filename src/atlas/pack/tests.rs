@@ -724,3 +724,36 @@ fn box_waste_is_the_empty_part_of_the_minimum_area_rectangle() {
         l.area_m2
     );
 }
+
+#[test]
+fn a_dumbbell_is_cut_across_its_bar() {
+    // Two 4 × 4 squares joined by a 4 × 0.5 bar along x (length 12): the neck is in the bar,
+    // so one side holds the left square's triangles and the other the right square's.
+    let mut uv: Vec<[f64; 2]> = Vec::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    let mut quad = |x0: f64, y0: f64, x1: f64, y1: f64| {
+        let k = uv.len() as u32;
+        uv.extend([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]);
+        triangles.extend([[k, k + 1, k + 2], [k, k + 2, k + 3]]);
+    };
+    quad(0.0, 0.0, 4.0, 4.0);
+    quad(4.0, 1.75, 8.0, 2.25);
+    quad(8.0, 0.0, 12.0, 4.0);
+    let dumbbell = OwnedChart {
+        uv,
+        triangles,
+        area_m2: 34.0,
+    };
+    let side = place::neck_cut(&dumbbell.as_pack_chart()).expect("a cut");
+    assert_eq!(side.len(), 6);
+    assert_eq!(side[0], side[1], "the left square stays together");
+    assert_eq!(side[4], side[5], "the right square stays together");
+    assert_ne!(side[0], side[4], "the squares are on either side");
+    // A chart with no UV area has no neck.
+    let flat = OwnedChart {
+        uv: vec![[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]],
+        triangles: vec![[0, 1, 2]],
+        area_m2: 1.0,
+    };
+    assert!(place::neck_cut(&flat.as_pack_chart()).is_none());
+}
