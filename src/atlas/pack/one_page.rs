@@ -4,15 +4,17 @@ use std::ops::ControlFlow;
 
 use super::{
     largest_first, padded_box_order, place, Context, PackChart, PackError, PackOptions, Packing,
-    Steps, TexelDensity, HOLE_SCORED_MIN_CHARTS,
+    Steps, TexelDensity,
 };
 
 /// One page at the fixed density `texels_per_unit`, if it holds every chart: the horizons'
-/// packing, else the packing with hole filling (the searches of one trial of the fit-to-page
-/// density search, [`super::pack_charts`]; `options.density` is ignored). `Ok(None)` when neither
-/// places every chart. A cheaper test than [`super::pack_charts`] at that density, which opens more
-/// pages for what does not fit: a failing horizon packing stops at its first chart that does
-/// not fit. Same guarantees as [`super::pack_charts`] for the packing returned.
+/// packing, else the packing with hole filling by the plain first fit (the searches of one
+/// trial of the fit-to-page density search, [`super::pack_charts`], but never the
+/// contact-scored hole search, which costs several times more; `options.density` is
+/// ignored). `Ok(None)` when neither places every chart. A cheaper test than
+/// [`super::pack_charts`] at that density, which opens more pages for what does not fit: each
+/// trial stops at its first chart that does not fit. Same guarantees as
+/// [`super::pack_charts`] for the packing returned.
 ///
 /// Errors: [`PackError::InvalidOption`], [`PackError::InvalidChart`].
 pub fn pack_one_page(
@@ -58,7 +60,7 @@ pub fn pack_one_page(
     let total_area_m2: f64 = order.iter().map(|&i| prepared[i].area_m2).sum();
     let hole_order = padded_box_order(charts, &prepared, &order, options, total_area_m2);
     ctx.holes = true;
-    ctx.scored = order.len() >= HOLE_SCORED_MIN_CHARTS;
+    ctx.scored = false;
     ctx.order = &hole_order;
     let t = ctx.run(
         texels_per_unit,
