@@ -69,7 +69,7 @@ pub struct PipelineStats {
     pub parameterize_splits: [usize; 3],
     /// Small charts merged back by the parameterize stage.
     pub parameterize_merges: usize,
-    /// Charts cut in two because that raised the packing efficiency (`cut_for_packing`).
+    /// Charts added by cuts that raised the packing efficiency (`cut_for_packing`).
     pub packing_cuts: usize,
     /// Charts kept although their stretch or area ratio is above the bound (could not be split
     /// further).

@@ -7,7 +7,7 @@
 
 use super::error::AtlasError;
 use super::options::AtlasOptions;
-use super::pack::place::box_waste_m2;
+use super::pack::place::{box_waste_m2, neck_cut};
 use super::pack::{pack_charts_from, pack_one_page, PackChart, Packing, TexelDensity};
 use super::pack_input::{pack_charts_of, pack_inputs};
 use super::parameterize;
@@ -52,29 +52,31 @@ const PACKING_CUT_MAX_FACES: usize = 20_000;
 /// A cut is kept only when it raises the estimated efficiency by at least this (absolute):
 /// every seam costs texture continuity and gutter, so a marginal gain is not worth one.
 const PACKING_CUT_MIN_GAIN: f64 = 0.02;
-/// At most this many single-chart tries (each a packing of the whole mesh; on low-poly meshes
-/// also a validation).
+/// At most this many charts tried one at a time (each cut a packing of the whole mesh, two
+/// cuts per chart; on low-poly meshes one cut, with a validation).
 const PACKING_CUT_MAX_TRIES: usize = 4;
 
 /// Packing-aware cuts (issue 21's packing target, 0.72; 0.61 on low-poly meshes): when the
 /// atlas has few charts and packs poorly (a strip, a disc or a chart with long arms wastes
 /// much of a square page), the chart that wastes the most space in its minimum-area rectangle
-/// (`pack::place::box_waste_m2`) is cut in two from the ends of a diameter of its face graph
-/// (`segment::split_in_two`, then the disk guarantee). Each part keeps its parent's map
-/// restricted to it (a cut in UV space: every face keeps its UV image, so flips, overlaps and
-/// each face's distortion are unchanged, and nothing is flattened); on low-poly meshes
-/// ([`LOW_POLY_MAX_FACES`]) the mesh is validated again with the cut instead (no merge-back,
-/// so the parts stay apart). The charts are packed, and the cut is kept when the estimated
-/// efficiency (Σ chart area × density² over the page area: the packer places each chart at
-/// exactly that UV area) rises by at least [`PACKING_CUT_MIN_GAIN`]: first one packing at the
-/// density of that gain ([`pack_one_page`]), then, when it fits, the full density search (the
-/// better of the two is kept: the search is not monotone). Otherwise the chart wasting the
-/// next most is tried, up to [`PACKING_CUT_MAX_TRIES`] tries; when no single cut paid and
-/// there are at most [`PACKING_CUT_ALL_MAX_CHARTS`] charts, every chart is cut at once and
-/// validated again (then every piece again, up to [`PACKING_CUT_ALL_LEVELS`] levels), the
-/// last tries. Only with [`TexelDensity::FitToPage`] (an explicit density does not change
-/// with the cut). Deterministic (every step is). Returns the charts to use, the number of
-/// cuts kept and the packing of those charts.
+/// (`pack::place::box_waste_m2`) is cut: first across its narrowest part in UV
+/// (`pack::place::neck_cut`: the neck of a dumbbell, the root of an arm), and when that does
+/// not pay, in two from the ends of a diameter of its face graph (`segment::split_in_two`);
+/// the disk guarantee then makes disks of the sides. Each part keeps its parent's map
+/// restricted to it (a cut in UV space: every face keeps its UV shape and nothing is
+/// flattened); on low-poly meshes ([`LOW_POLY_MAX_FACES`]) only the diameter cut is tried and
+/// the mesh is validated again with it (no merge-back, so the parts stay apart). The charts
+/// are packed, and the cut is kept when the estimated efficiency (Σ chart area × density²
+/// over the page area: the packer places each chart at exactly that UV area) rises by at least
+/// [`PACKING_CUT_MIN_GAIN`]: first one packing at the density of that gain
+/// ([`pack_one_page`]), then, when it fits, the full density search (the better of the two is
+/// kept: the search is not monotone). Otherwise the chart wasting the next most is tried, up
+/// to [`PACKING_CUT_MAX_TRIES`] charts; when no single cut paid and there are at most
+/// [`PACKING_CUT_ALL_MAX_CHARTS`] charts, every chart is cut at once and validated again
+/// (then every piece again, up to [`PACKING_CUT_ALL_LEVELS`] levels), the last tries. Only
+/// with [`TexelDensity::FitToPage`] (an explicit density does not change with the cut).
+/// Deterministic (every step is). Returns the charts to use, the number of charts the cuts
+/// added and the packing of those charts.
 pub(super) fn cut_for_packing(
     mesh: &TriangleMesh,
     validated: parameterize::ParameterizedCharts,
@@ -162,12 +164,15 @@ pub(super) fn cut_for_packing(
     let mut current = validated;
     let mut cuts = 0;
     let mut tried: Vec<Vec<FaceId>> = Vec::new();
-    // `current` with the charts `picks` each cut in two (then made disks), every part keeping
+    // `current` with the charts `picks` each cut in two (across the neck with `neck`, else
+    // across the 3-D diameter; then made disks), every part keeping
     // its parent's map restricted to it: a cut in UV space, no flattening. Every face keeps its
     // UV shape, so flips, overlaps and each face's angle distortion are those of `current`; the
     // packer scales each part to its own 3-D area, as every chart, so a face's stretch changes
-    // by its part's scale (craft_speederD: L∞ 3.46 → 4.03, cakeBirthday 8.52 → 6.53). With
-    // `flatten` (low-poly meshes, and the last resort) the mesh is validated again instead.
+    // by the ratio of its part's scale to its parent's. (The atlas L∞ of craft_speederD and
+    // cakeBirthday moves with the cuts both ways, but on 3-D slivers, height ~1e-7 of their
+    // length, whose f32 UVs decide it wherever they land.) With `flatten` (low-poly meshes,
+    // and the last resort) the mesh is validated again instead.
     // Charts listed in `unresolved` are never picked, so their indices follow their first face.
     let validate_options = parameterize::ParameterizeOptions {
         merge_passes: 0,
@@ -175,7 +180,8 @@ pub(super) fn cut_for_packing(
     };
     let cut = |current: &parameterize::ParameterizedCharts,
                picks: &[usize],
-               flatten: bool|
+               flatten: bool,
+               neck: bool|
      -> Result<parameterize::ParameterizedCharts, AtlasError> {
         let charts = &current.segmentation.charts;
         let mut stats = current.segmentation.stats;
@@ -188,7 +194,35 @@ pub(super) fn cut_for_packing(
                 continue;
             }
             let inside = |f: FaceId| faces.binary_search(&f).is_ok();
-            let (a, b) = segment::split_in_two(mesh, faces, &inside);
+            let by_neck = if neck {
+                parent.and_then(|(map, _)| {
+                    let (cm, _) = parameterize::chart_mesh(mesh, faces);
+                    let side = neck_cut(&PackChart {
+                        uv: &map.uv,
+                        triangles: &cm.triangles,
+                        area_m2: 0.0,
+                    })?;
+                    let near: Vec<FaceId> = faces
+                        .iter()
+                        .zip(&side)
+                        .filter(|(_, &far)| !far)
+                        .map(|(&f, _)| f)
+                        .collect();
+                    let far: Vec<FaceId> = faces
+                        .iter()
+                        .zip(&side)
+                        .filter(|(_, &far)| far)
+                        .map(|(&f, _)| f)
+                        .collect();
+                    Some((near, far))
+                })
+            } else {
+                None
+            };
+            let (a, b) = match by_neck {
+                Some(ab) => ab,
+                None => segment::split_in_two(mesh, faces, &inside),
+            };
             for mut part in segment::enforce_disks(mesh, vec![a, b], &mut stats) {
                 part.sort_unstable();
                 let map = parent.and_then(|p| parameterize::restricted_map(mesh, &part, p));
@@ -257,14 +291,19 @@ pub(super) fn cut_for_packing(
             break;
         };
         tried.push(charts[pick].clone());
-        let candidate = cut(&current, &[pick], low_poly)?;
-        if let Some((eff, packing)) = try_candidate(&candidate, best)? {
-            best = eff;
-            best_packing = packing;
-            cuts += 1;
-            current = candidate;
-            waste = wastes(&current)?;
-            tried.clear();
+        // Across the chart's neck first (kept maps), then across its 3-D diameter.
+        let ways: &[bool] = if low_poly { &[false] } else { &[true, false] };
+        for &neck in ways {
+            let candidate = cut(&current, &[pick], low_poly, neck)?;
+            if let Some((eff, packing)) = try_candidate(&candidate, best)? {
+                best = eff;
+                best_packing = packing;
+                cuts += candidate.segmentation.charts.len() - current.segmentation.charts.len();
+                current = candidate;
+                waste = wastes(&current)?;
+                tried.clear();
+                break;
+            }
         }
     }
     // No single cut paid (e.g. a tube in four equal strips, where cutting one strip leaves an
@@ -285,7 +324,7 @@ pub(super) fn cut_for_packing(
             if picks.is_empty() {
                 break;
             }
-            let candidate = cut(base, &picks, true)?;
+            let candidate = cut(base, &picks, true, false)?;
             let cut_now = cut_before + picks.len();
             if let Some((_, packing)) = try_candidate(&candidate, best)? {
                 cuts = cut_now;
