@@ -125,9 +125,10 @@ pub(super) fn cut_for_packing(
             Some(packing),
         ))
     };
-    // The density at which `v`'s charts would pack at efficiency `goal`, when one page holds
-    // them there (one packing at that fixed density, two when the horizons need a second page:
-    // a cheap test before the full search of `estimate`).
+    // The density at which `v`'s charts would pack at efficiency `goal`, with the packing,
+    // when one page holds them there (`pack_one_page`: the horizons, then the plain first-fit
+    // hole filling, each stopping at the first chart that does not fit; a cheap test before
+    // the full search of `estimate`).
     let fits_at = |v: &parameterize::ParameterizedCharts,
                    goal: f64|
      -> Result<Option<(f64, Packing)>, AtlasError> {
