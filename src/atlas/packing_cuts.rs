@@ -40,8 +40,9 @@ const PACKING_CUT_ALL_MAX_CHARTS: usize = 8;
 const PACKING_CUT_ALL_LEVELS: usize = 2;
 /// ... and only on atlases of at most this many packed charts. Many charts alone do not make a
 /// page pack well: PalmTree's 67 charts pack at 0.49 because two of them hold half the page,
-/// and one cut takes it to 0.67. Above this count a try's packing costs too much. (The check packs the charts once, and that packing is the stage's own when no
-/// cut is kept, so an atlas that already packs well pays nothing.)
+/// and one cut takes it to 0.67. Above this count a try's packing costs too much. (The check
+/// packs the charts once, and that packing is the stage's own when no cut is kept, so an
+/// atlas that already packs well pays nothing.)
 const PACKING_CUT_MAX_CHARTS: usize = 256;
 /// ... and only on meshes of at most this many faces. Trade-off: the packings of large charts
 /// cost more (more texels, more outline triangles) and a try packs once, a kept cut a density
