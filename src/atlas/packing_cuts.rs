@@ -204,18 +204,14 @@ pub(super) fn cut_for_packing(
                         triangles: &cm.triangles,
                         area_m2: 0.0,
                     })?;
-                    let near: Vec<FaceId> = faces
-                        .iter()
-                        .zip(&side)
-                        .filter(|(_, &far)| !far)
-                        .map(|(&f, _)| f)
-                        .collect();
-                    let far: Vec<FaceId> = faces
-                        .iter()
-                        .zip(&side)
-                        .filter(|(_, &far)| far)
-                        .map(|(&f, _)| f)
-                        .collect();
+                    let (mut near, mut far) = (Vec::new(), Vec::new());
+                    for (&f, &beyond) in faces.iter().zip(&side) {
+                        if beyond {
+                            far.push(f);
+                        } else {
+                            near.push(f);
+                        }
+                    }
                     Some((near, far))
                 })
             } else {

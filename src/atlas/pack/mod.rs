@@ -222,29 +222,9 @@ pub fn pack_charts_from(
         _ => FitStart::Fill,
     };
     let monitor = &mut |(done, total): (usize, usize)| progress.advance(done, total);
-    // Each chart's density-independent data on its own (in parallel), then the first error in
-    // chart order, whatever the thread count.
-    let prepared = {
-        use rayon::prelude::*;
-        charts
-            .par_iter()
-            .enumerate()
-            .map(|(i, c)| place::prepare_chart(i, c))
-            .collect::<Vec<_>>()
-            .into_iter()
-            .collect::<Result<Vec<_>, _>>()?
-    };
+    let prepared = prepare_all(charts)?;
     let order = largest_first(&prepared);
-    let mut ctx = Context {
-        charts,
-        prepared: &prepared,
-        order: &order,
-        options,
-        trials: std::sync::atomic::AtomicU32::new(0),
-        holes: false,
-        scored: false,
-        first_miss_stops: false,
-    };
+    let mut ctx = Context::new(charts, &prepared, &order, options);
     let pack = |ctx: &Context<'_, '_>,
                 start: FitStart,
                 monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>|
@@ -303,6 +283,19 @@ pub fn pack_charts_from(
         }
     }
     Ok(ctx.output(&trial))
+}
+
+/// Each chart's density-independent data ([`place::prepare_chart`]), computed in parallel,
+/// then the first error in chart order, whatever the thread count.
+fn prepare_all(charts: &[PackChart<'_>]) -> Result<Vec<place::PreparedChart>, PackError> {
+    use rayon::prelude::*;
+    charts
+        .par_iter()
+        .enumerate()
+        .map(|(i, c)| place::prepare_chart(i, c))
+        .collect::<Vec<_>>()
+        .into_iter()
+        .collect()
 }
 
 /// The charts with vertices, largest area first (lscm-2002 §4 step 2, isocharts-2004 §6 step
@@ -507,7 +500,26 @@ struct Trial {
     worst_size_ratio: f64,
 }
 
-impl Context<'_, '_> {
+impl<'c, 'a> Context<'c, 'a> {
+    /// A context for horizon packings (no hole filling), no trial run yet.
+    fn new(
+        charts: &'c [PackChart<'a>],
+        prepared: &'c [place::PreparedChart],
+        order: &'c [usize],
+        options: &'c PackOptions,
+    ) -> Self {
+        Self {
+            charts,
+            prepared,
+            order,
+            options,
+            trials: std::sync::atomic::AtomicU32::new(0),
+            holes: false,
+            scored: false,
+            first_miss_stops: false,
+        }
+    }
+
     fn page(&self) -> [u32; 2] {
         [self.options.width_texels, self.options.height_texels]
     }

@@ -3,8 +3,8 @@
 use std::ops::ControlFlow;
 
 use super::{
-    largest_first, padded_box_order, place, Context, PackChart, PackError, PackOptions, Packing,
-    Steps, TexelDensity,
+    largest_first, padded_box_order, prepare_all, Context, PackChart, PackError, PackOptions,
+    Packing, Steps, TexelDensity,
 };
 
 /// One page at the fixed density `texels_per_unit`, if it holds every chart: the horizons'
@@ -27,27 +27,10 @@ pub fn pack_one_page(
         ..*options
     };
     options.check()?;
-    let prepared = {
-        use rayon::prelude::*;
-        charts
-            .par_iter()
-            .enumerate()
-            .map(|(i, c)| place::prepare_chart(i, c))
-            .collect::<Vec<_>>()
-            .into_iter()
-            .collect::<Result<Vec<_>, _>>()?
-    };
+    let prepared = prepare_all(charts)?;
     let order = largest_first(&prepared);
-    let mut ctx = Context {
-        charts,
-        prepared: &prepared,
-        order: &order,
-        options,
-        trials: std::sync::atomic::AtomicU32::new(0),
-        holes: false,
-        scored: false,
-        first_miss_stops: true,
-    };
+    let mut ctx = Context::new(charts, &prepared, &order, options);
+    ctx.first_miss_stops = true;
     let mut ignore = |_: (usize, usize)| ControlFlow::Continue(());
     let t = ctx.run(
         texels_per_unit,

@@ -109,18 +109,13 @@ pub fn box_waste_m2(chart: &PackChart<'_>) -> f64 {
         return 0.0;
     }
     let s = prep.unit_scale;
-    let mut referenced = vec![false; chart.uv.len()];
-    for t in chart.triangles {
-        for &i in t {
-            referenced[i as usize] = true;
-        }
-    }
+    // The triangles' corners (repeats do not change the hull).
     let points: Vec<[f64; 2]> = chart
-        .uv
+        .triangles
         .iter()
-        .zip(&referenced)
-        .filter(|(_, &r)| r)
-        .map(|(p, _)| [(p[0] - prep.centre[0]) * s, (p[1] - prep.centre[1]) * s])
+        .flatten()
+        .map(|&i| chart.uv[i as usize])
+        .map(|p| [(p[0] - prep.centre[0]) * s, (p[1] - prep.centre[1]) * s])
         .collect();
     match min_area_box(&convex_hull(&points)) {
         Some(b) => (b.along * b.across - chart.area_m2).max(0.0),
