@@ -8,7 +8,7 @@
 use super::error::AtlasError;
 use super::options::AtlasOptions;
 use super::pack::place::{box_waste_m2, neck_cut};
-use super::pack::{pack_charts_from, pack_one_page, PackChart, Packing, TexelDensity};
+use super::pack::{pack_charts_cached, pack_one_page, PackCache, PackChart, Packing, TexelDensity};
 use super::pack_input::{pack_charts_of, pack_inputs};
 use super::parameterize;
 use super::progress::{Stage, StageProgress};
@@ -93,6 +93,10 @@ pub(super) fn cut_for_packing(
     } else {
         PACKING_CUT_BELOW
     };
+    // Every try packs the same charts but one (cut in two), first at the density of the gain
+    // it needs, the same for every try until one pays: the cache keeps their prepared data
+    // and their footprints at that density.
+    let cache = PackCache::new();
     // The charts of `v` to pack (not degenerate) and their total 3-D area.
     let packed_of = |inputs: &super::pack_input::PackInputs| -> (Vec<usize>, f64) {
         let packed: Vec<usize> = (0..inputs.degenerate.len())
@@ -114,10 +118,11 @@ pub(super) fn cut_for_packing(
             return Ok((1.0, n, None));
         }
         let input = pack_charts_of(v, &packed, &inputs.triangles, &inputs.area_m2);
-        let packing = pack_charts_from(
+        let packing = pack_charts_cached(
             &input,
             &options.pack,
             start,
+            &cache,
             &mut StageProgress::ignored(Stage::Pack),
         )?;
         Ok((
@@ -140,7 +145,8 @@ pub(super) fn cut_for_packing(
         }
         let density = (goal * page / total).sqrt();
         let input = pack_charts_of(v, &packed, &inputs.triangles, &inputs.area_m2);
-        Ok(pack_one_page(&input, &options.pack, density)?.map(|p| (density, p)))
+        cache.pin(density);
+        Ok(pack_one_page(&input, &options.pack, density, Some(&cache))?.map(|p| (density, p)))
     };
     // A candidate's efficiency and packing when they beat `best` by `PACKING_CUT_MIN_GAIN`: the
     // full search runs only when the candidate fits at the efficiency that would keep it.

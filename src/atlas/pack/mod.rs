@@ -67,11 +67,13 @@ use std::ops::ControlFlow;
 
 use super::progress::StageProgress;
 
+mod cache;
 mod hull;
 pub mod outline;
 pub mod placement;
 mod types;
 
+pub use cache::PackCache;
 pub use one_page::pack_one_page;
 pub use types::{PackChart, PackError, PackOptions, Packing, PlacedChart, TexelDensity};
 
@@ -216,15 +218,44 @@ pub fn pack_charts_from(
     start_texels_per_unit: Option<f64>,
     progress: &mut StageProgress<'_>,
 ) -> Result<Packing, PackError> {
+    pack_charts_with(charts, options, start_texels_per_unit, None, progress)
+}
+
+/// [`pack_charts_from`] through `cache` ([`PackCache`]): what the cache holds for these charts
+/// is not computed again, and what is computed is kept there. The same packing.
+pub fn pack_charts_cached(
+    charts: &[PackChart<'_>],
+    options: &PackOptions,
+    start_texels_per_unit: Option<f64>,
+    cache: &PackCache,
+    progress: &mut StageProgress<'_>,
+) -> Result<Packing, PackError> {
+    pack_charts_with(
+        charts,
+        options,
+        start_texels_per_unit,
+        Some(cache),
+        progress,
+    )
+}
+
+fn pack_charts_with(
+    charts: &[PackChart<'_>],
+    options: &PackOptions,
+    start_texels_per_unit: Option<f64>,
+    cache: Option<&PackCache>,
+    progress: &mut StageProgress<'_>,
+) -> Result<Packing, PackError> {
     options.check()?;
     let start = match start_texels_per_unit {
         Some(d) if d.is_finite() && d > 0.0 => FitStart::Guess(d),
         _ => FitStart::Fill,
     };
     let monitor = &mut |(done, total): (usize, usize)| progress.advance(done, total);
-    let prepared = prepare_all(charts)?;
+    let (prepared, ids) = prepare_all(charts, cache)?;
     let order = largest_first(&prepared);
     let mut ctx = Context::new(charts, &prepared, &order, options);
+    ctx.cache = cache.zip(ids.as_deref());
     let pack = |ctx: &Context<'_, '_>,
                 start: FitStart,
                 monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>|
@@ -286,16 +317,23 @@ pub fn pack_charts_from(
 }
 
 /// Each chart's density-independent data ([`place::prepare_chart`]), computed in parallel,
-/// then the first error in chart order, whatever the thread count.
-fn prepare_all(charts: &[PackChart<'_>]) -> Result<Vec<place::PreparedChart>, PackError> {
+/// then the first error in chart order, whatever the thread count; through `cache` when given
+/// (with the charts' ids there).
+type Prepared = (Vec<place::PreparedChart>, Option<Vec<usize>>);
+fn prepare_all(charts: &[PackChart<'_>], cache: Option<&PackCache>) -> Result<Prepared, PackError> {
     use rayon::prelude::*;
-    charts
+    if let Some(cache) = cache {
+        let (prepared, ids) = cache::prepare_cached(charts, cache)?;
+        return Ok((prepared, Some(ids)));
+    }
+    let prepared = charts
         .par_iter()
         .enumerate()
         .map(|(i, c)| place::prepare_chart(i, c))
         .collect::<Vec<_>>()
         .into_iter()
-        .collect()
+        .collect::<Result<_, _>>()?;
+    Ok((prepared, None))
 }
 
 /// The charts with vertices, largest area first (lscm-2002 §4 step 2, isocharts-2004 §6 step
@@ -475,6 +513,8 @@ struct Context<'c, 'a> {
     /// Whether a single-page trial stops at its first chart that does not fit, even with
     /// `holes` (a yes-or-no test, [`pack_one_page`]).
     first_miss_stops: bool,
+    /// The cache of the packing and the charts' ids there ([`PackCache`]).
+    cache: Option<(&'c PackCache, &'c [usize])>,
 }
 
 /// Where one chart went in a trial.
@@ -517,6 +557,7 @@ impl<'c, 'a> Context<'c, 'a> {
             holes: false,
             scored: false,
             first_miss_stops: false,
+            cache: None,
         }
     }
 
@@ -544,7 +585,6 @@ impl<'c, 'a> Context<'c, 'a> {
     ) -> Result<Trial, PackError> {
         self.trials
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let o = self.options;
         let [w, h] = self.page();
         let order_area_m2: f64 = self.order.iter().map(|&j| self.prepared[j].area_m2).sum();
         let mut trial = Trial {
@@ -559,36 +599,12 @@ impl<'c, 'a> Context<'c, 'a> {
         // early, so not all up front); each chart's are independent of the others: the same
         // result whatever the thread count.
         const BATCH: usize = 16;
-        let mut batch: Vec<Vec<place::Orientation>> = Vec::new();
+        let mut batch: Vec<std::sync::Arc<Vec<place::Orientation>>> = Vec::new();
         for (n, &i) in self.order.iter().enumerate() {
             progress.step()?;
             if n % BATCH == 0 {
-                use rayon::prelude::*;
                 let end = (n + BATCH).min(self.order.len());
-                let prepared = self.prepared;
-                let holes = self.holes;
-                let scored = self.scored;
-                batch = self.order[n..end]
-                    .par_iter()
-                    .map(|&j| {
-                        let rotations = chart_rotations(
-                            &prepared[j],
-                            texels_per_unit,
-                            o.rotations,
-                            holes,
-                            scored,
-                        );
-                        place::orientations(
-                            &self.charts[j],
-                            &prepared[j],
-                            texels_per_unit,
-                            rotations,
-                            o.padding_texels,
-                            [w, h],
-                            scored,
-                        )
-                    })
-                    .collect();
+                batch = self.footprints(&self.order[n..end], texels_per_unit);
                 batch.reverse();
             }
             let orients = batch.pop().unwrap_or_default();

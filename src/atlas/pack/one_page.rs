@@ -3,8 +3,8 @@
 use std::ops::ControlFlow;
 
 use super::{
-    largest_first, padded_box_order, prepare_all, Context, PackChart, PackError, PackOptions,
-    Packing, Steps, TexelDensity,
+    largest_first, padded_box_order, prepare_all, Context, PackCache, PackChart, PackError,
+    PackOptions, Packing, Steps, TexelDensity,
 };
 
 /// One page at the fixed density `texels_per_unit`, if it holds every chart: the horizons'
@@ -14,22 +14,26 @@ use super::{
 /// ignored). `Ok(None)` when neither places every chart. A cheaper test than
 /// [`super::pack_charts`] at that density, which opens more pages for what does not fit: each
 /// trial stops at its first chart that does not fit. Same guarantees as
-/// [`super::pack_charts`] for the packing returned.
+/// [`super::pack_charts`] for the packing returned. Through `cache` when given
+/// ([`PackCache`]; its footprints are used and kept when `texels_per_unit` is its pinned
+/// density).
 ///
 /// Errors: [`PackError::InvalidOption`], [`PackError::InvalidChart`].
 pub fn pack_one_page(
     charts: &[PackChart<'_>],
     options: &PackOptions,
     texels_per_unit: f64,
+    cache: Option<&PackCache>,
 ) -> Result<Option<Packing>, PackError> {
     let options = &PackOptions {
         density: TexelDensity::TexelsPerUnit(texels_per_unit),
         ..*options
     };
     options.check()?;
-    let prepared = prepare_all(charts)?;
+    let (prepared, ids) = prepare_all(charts, cache)?;
     let order = largest_first(&prepared);
     let mut ctx = Context::new(charts, &prepared, &order, options);
+    ctx.cache = cache.zip(ids.as_deref());
     ctx.first_miss_stops = true;
     let mut ignore = |_: (usize, usize)| ControlFlow::Continue(());
     let t = ctx.run(

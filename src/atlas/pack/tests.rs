@@ -635,14 +635,9 @@ fn a_failing_hole_filling_trial_counts_only_the_charts_it_could_not_place() {
     let mut skipped_some = false;
     for holes in [true, false] {
         let ctx = Context {
-            charts: &borrowed,
-            prepared: &prepared,
-            order: &order,
-            options: &options,
-            trials: std::sync::atomic::AtomicU32::new(0),
             holes,
             scored: holes,
-            first_miss_stops: false,
+            ..Context::new(&borrowed, &prepared, &order, &options)
         };
         for grow in [1.02, 1.05, 1.10, 1.15, 1.20, 1.30] {
             let mut quiet = |_: (usize, usize)| ControlFlow::Continue(());
@@ -693,7 +688,7 @@ fn one_page_at_a_fixed_density_is_packed_with_every_guarantee_or_refused() {
     let options = PackOptions::default();
     let fit = pack_charts(&borrowed, &options, &mut go()).unwrap();
     let below = fit.texels_per_unit * 0.9;
-    let packing = pack_one_page(&borrowed, &options, below)
+    let packing = pack_one_page(&borrowed, &options, below, None)
         .unwrap()
         .expect("one page holds the charts below the fit-to-page density");
     assert_eq!(packing.num_pages, 1);
@@ -704,9 +699,49 @@ fn one_page_at_a_fixed_density_is_packed_with_every_guarantee_or_refused() {
     };
     assert_guarantees(&check_packing(&borrowed, &packing, &fixed), "one page");
     let far_above = fit.texels_per_unit * 2.0;
-    assert!(pack_one_page(&borrowed, &options, far_above)
+    assert!(pack_one_page(&borrowed, &options, far_above, None)
         .unwrap()
         .is_none());
+}
+
+#[test]
+fn a_cache_changes_no_packing_and_makes_no_footprint_twice() {
+    let charts = mixed_set(30, 11);
+    let borrowed = as_pack_charts(&charts);
+    let options = PackOptions::default();
+    let cache = PackCache::new();
+    // A density search through the cache: the same packing; with no density pinned, only the
+    // prepared charts are kept.
+    let plain = pack_charts(&borrowed, &options, &mut go()).unwrap();
+    let cached = pack_charts_cached(&borrowed, &options, None, &cache, &mut go()).unwrap();
+    assert_eq!(cached, plain);
+    assert_eq!(cache.kept(), (30, 0));
+    // One page at the pinned density: the same packing, and the footprints are kept ...
+    let d = plain.texels_per_unit * 0.9;
+    cache.pin(d);
+    let first = pack_one_page(&borrowed, &options, d, Some(&cache)).unwrap();
+    assert!(first.is_some());
+    assert_eq!(first, pack_one_page(&borrowed, &options, d, None).unwrap());
+    let kept = cache.kept().1;
+    assert!(kept >= 30, "{kept} footprint sets kept for 30 charts");
+    // ... so the same charts again make none.
+    assert_eq!(
+        pack_one_page(&borrowed, &options, d, Some(&cache)).unwrap(),
+        first
+    );
+    assert_eq!(cache.kept().1, kept);
+    // Charts rebuilt with the same content are found again: with one chart replaced, only its
+    // footprints are made (at most two sets: the horizons' and the hole filling's).
+    let mut rebuilt = mixed_set(30, 11);
+    rebuilt[0] = disc(12, 3.0);
+    let borrowed = as_pack_charts(&rebuilt);
+    let again = pack_one_page(&borrowed, &options, d, Some(&cache)).unwrap();
+    assert_eq!(again, pack_one_page(&borrowed, &options, d, None).unwrap());
+    assert_eq!(cache.kept().0, 31);
+    assert!((kept + 1..=kept + 2).contains(&cache.kept().1));
+    // Another density drops the footprints.
+    cache.pin(d * 0.95);
+    assert_eq!(cache.kept(), (31, 0));
 }
 
 #[test]
