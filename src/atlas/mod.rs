@@ -58,7 +58,7 @@ use pack_input::{pack_charts_of, pack_inputs, PackInputs};
 use packing_cuts::cut_for_packing;
 use parameterize::{parameterize_charts, ChartDefect};
 use segment::{segment_charts_with, SegmentMethod};
-use uv_guard::{guard_uvs, restore_slivers, sampled_folds, split_off_faces};
+use uv_guard::{guard_uvs, restore_slivers, sampled_fold_faces, sampled_folds, split_off_faces};
 
 /// Counters of one [`generate`] run.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -268,27 +268,30 @@ pub fn generate(
         let (outcome, check) = guard_uvs(mesh, &mut written.corner_uvs, &written.face_page);
         stats.uv_collapsed_faces += outcome.collapsed_faces;
         stats.uv_nudged_vertices += outcome.nudged_vertices;
+        let face_chart: Vec<u32> = parameterized
+            .segmentation
+            .face_chart
+            .iter()
+            .map(|(_, c)| c.index() as u32)
+            .collect();
+        let size = [options.pack.width_texels, options.pack.height_texels];
+        let (face_page, num_pages) = (&written.face_page, written.packing.num_pages);
         stats.uv_nudged_vertices += restore_slivers(
             mesh,
             &check,
             &mut written.corner_uvs,
-            &written.face_page,
-            [options.pack.width_texels, options.pack.height_texels],
+            face_page,
+            size,
+            &|uvs| sampled_fold_faces(uvs, face_page, num_pages, size, &face_chart),
         );
         let mut faults = outcome.unrepaired;
         if faults.is_empty() && round < GUARD_SPLIT_ROUNDS {
-            let face_chart: Vec<u32> = parameterized
-                .segmentation
-                .face_chart
-                .iter()
-                .map(|(_, c)| c.index() as u32)
-                .collect();
             faults = sampled_folds(
                 mesh,
                 &written.corner_uvs,
                 &written.face_page,
                 written.packing.num_pages,
-                [options.pack.width_texels, options.pack.height_texels],
+                size,
                 &face_chart,
             );
         }

@@ -32,8 +32,11 @@
 //!    their chart by the report's own sampling (a sliver thinner than the raster's rounding):
 //!    alone, a face keeps the padding from every other chart;
 //! 4. slivers whose UV height the rounding set far from their 3-D height get their apex moved
-//!    back (`slivers.rs`, [`restore_slivers`]): the one step that moves a corner of a face that
-//!    is not flipped or degenerate, and only of faces thinner than 1/16 texel.
+//!    back (`slivers.rs`, [`restore_slivers`]), and where that is not enough one base vertex
+//!    with it: the one step that moves a corner of a face that is not flipped or degenerate,
+//!    by at most 16 spacings, at the vertices of faces thinner than 1/16 texel; a base move
+//!    after which a face at its vertices covers a texel centre of another face of its chart is
+//!    undone.
 //!
 //! # Invariants
 //! Pure and deterministic: faces and vertices are visited in index order; no hashing. Steps 1–3
@@ -419,6 +422,23 @@ pub(super) fn sampled_folds(
             }
         })
         .collect();
+    faces.sort_unstable();
+    faces.dedup();
+    faces
+}
+
+/// Both faces of every pair of [`sampled_folds`], as face indices, ascending.
+pub(super) fn sampled_fold_faces(
+    corner_uvs: &[[[f32; 2]; 3]],
+    face_page: &[u32],
+    num_pages: u32,
+    size: [u32; 2],
+    face_chart: &[u32],
+) -> Vec<u32> {
+    let pairs = super::measure::sampled_same_chart_pairs(
+        corner_uvs, face_page, num_pages, size, face_chart,
+    );
+    let mut faces: Vec<u32> = pairs.into_iter().flat_map(|(a, b)| [a, b]).collect();
     faces.sort_unstable();
     faces.dedup();
     faces

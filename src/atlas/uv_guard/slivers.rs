@@ -11,7 +11,16 @@
 //! non-degenerate and oriented as its chart (`moves_fine`). A move of at most 16 spacings is
 //! far below a texel, inside the padding. Deterministic: faces in index order, points in a
 //! fixed order, strict improvement.
-use super::{f32_spacing, moves_fine, UvVertices};
+//!
+//! The apex alone often cannot do it: the height asked for can be a tenth of a spacing, and
+//! the apex must also sit within about that height of its place along the base (a shear of
+//! `δ / h` otherwise), a target a few hundredths of a spacing cell wide, which the `f32`
+//! points around the apex rarely hit. When the face is still above [`BASE_SEARCH_ABOVE_LINF`], one base
+//! vertex at a time is moved too ([`BASE_SEARCH_ULPS`]): each move shifts the apex's target
+//! against the `f32` grid by a fraction of a spacing, and the apex is tried at the `f32`
+//! points nearest that target. The faces at both vertices are measured and checked as for the
+//! apex alone.
+use super::{f32_spacing, moves_fine, oriented, UvVertices};
 use crate::atlas::measure::{face_metric, OrientationCheck};
 use crate::mesh::{FaceId, TriangleMesh};
 
@@ -27,6 +36,22 @@ pub(in crate::atlas) const SLIVER_LINF_OK: f64 = 2.0;
 /// ((2·16 + 1)² points). Trade-off: a wider square finds heights closer to the asked one, at a
 /// cost paid only on slivers.
 const APEX_SEARCH_ULPS: i32 = 16;
+
+/// The base search (module doc) tries each base vertex at every `f32` point within this many
+/// spacings on each axis, with the apex at the 3 × 3 `f32` points nearest its target. Trade-off:
+/// a wider square gives more targets (each hit with a chance of about 6 (h/spacing)², h the
+/// height asked for), at 2 (2·8 + 1)² · 9 shapes per sliver searched.
+const BASE_SEARCH_ULPS: i32 = 8;
+
+/// The base search runs on thin faces whose L∞ is above this after the apex search: the
+/// default bound of a chart's L∞ (`--max-linf`), past which a sliver would be the atlas's worst
+/// face. Trade-off: below it the search costs (a build of the fold raster when it moves
+/// anything: bunny's pack stage +15% for its L∞ 2.417 → 2.397) more than it gains.
+const BASE_SEARCH_ABOVE_LINF: f64 = 3.0;
+
+/// At most this many slivers get the base search per atlas: a bound on its cost (each costs
+/// about half a millisecond) on meshes made of slivers.
+const BASE_SEARCHES_MAX: usize = 1024;
 
 /// The report's per-face L∞ (`measure::face_metric`: max(Γ, 1/γ)) of face `f` with UV `uv`,
 /// at scale `k` (the atlas's UV area over 3-D area); infinite for a UV-degenerate face.
@@ -45,15 +70,18 @@ fn face_linf(mesh: &TriangleMesh, f: usize, uv: &[[f32; 2]; 3], k: f64) -> f64 {
     }
 }
 
-/// Moves the apex of every thin face with a high L∞ (module doc); returns the UV vertices
-/// moved. `check` is `measure::orientation_check` of `corner_uvs` as they are on entry (the
-/// guard's last); `size = [W, H]` texels of a page.
+/// Moves the apex of every thin face with a high L∞, then the base search on those still high
+/// (module doc); returns the UV vertices moved. `check` is `measure::orientation_check` of
+/// `corner_uvs` as they are on entry (the guard's last); `size = [W, H]` texels of a page;
+/// `folds(uvs)`: the faces (ascending) that cover a texel centre of another face of their chart
+/// ([`super::sampled_fold_faces`]), by which base moves are undone.
 pub(in crate::atlas) fn restore_slivers(
     mesh: &TriangleMesh,
     check: &OrientationCheck,
     corner_uvs: &mut [[[f32; 2]; 3]],
     face_page: &[u32],
     size: [u32; 2],
+    folds: &Folds,
 ) -> usize {
     let nf = corner_uvs.len();
     let used = |f: usize| !check.uv_degenerate[f] && !check.degenerate_3d[f];
@@ -69,6 +97,9 @@ pub(in crate::atlas) fn restore_slivers(
     let texel = 1.0 / f64::from(size[0].max(size[1]).max(1));
     let mut vertices: Option<UvVertices> = None;
     let mut moved = 0;
+    // The thin faces still above BASE_SEARCH_ABOVE_LINF after their apex search, with their
+    // apex.
+    let mut still: Vec<(usize, usize)> = Vec::new();
     for f in (0..nf).filter(|&f| used(f) && !check.flipped(f)) {
         let Some(apex) = thin_apex(mesh, check, corner_uvs, f, k, texel) else {
             continue;
@@ -127,8 +158,235 @@ pub(in crate::atlas) fn restore_slivers(
             }
             moved += 1;
         }
+        if face_linf(mesh, f, &corner_uvs[f], k) > BASE_SEARCH_ABOVE_LINF {
+            still.push((f, apex));
+        }
+    }
+    if let Some(vertices) = &vertices {
+        moved += restore_by_base(mesh, check, corner_uvs, vertices, (&still, k), folds);
     }
     moved
+}
+
+/// `folds(corner_uvs)`: the faces (ascending) that cover a texel centre of another face of
+/// their chart by the report's sampling ([`super::sampled_fold_faces`]).
+pub(in crate::atlas) type Folds<'a> = dyn Fn(&[[[f32; 2]; 3]]) -> Vec<u32> + 'a;
+
+/// One base search kept: the faces at its two vertices (ascending) and each moved corner's
+/// position before.
+struct BaseMove {
+    faces: Vec<u32>,
+    before: Vec<(usize, [f32; 2])>,
+}
+
+/// The second pass of [`restore_slivers`]: the base search ([`search_base`]) on each thin face
+/// `still` above [`BASE_SEARCH_ABOVE_LINF`] after the first (with its apex corner; ascending), at most
+/// [`BASE_SEARCHES_MAX`]; `vertices` are the UV vertices of `corner_uvs`. Then a move
+/// whose faces `folds` finds covering a texel centre of another face of their chart (the
+/// report's sampling, which a sliver thinner than its rounding can cross) is undone, as is
+/// every later move that shares a face with an undone one (its checks saw the undone
+/// positions), in reverse order. Returns the UV vertices moved.
+fn restore_by_base(
+    mesh: &TriangleMesh,
+    check: &OrientationCheck,
+    corner_uvs: &mut [[[f32; 2]; 3]],
+    vertices: &UvVertices,
+    (still, k): (&[(usize, usize)], f64),
+    folds: &Folds,
+) -> usize {
+    let mut moves: Vec<BaseMove> = Vec::new();
+    for &(f, apex) in still.iter().take(BASE_SEARCHES_MAX) {
+        // An earlier move here may have changed it.
+        if face_linf(mesh, f, &corner_uvs[f], k) <= BASE_SEARCH_ABOVE_LINF {
+            continue;
+        }
+        let Some((base_corner, base_at, apex_at)) =
+            search_base(mesh, check, vertices, corner_uvs, (f, apex), k)
+        else {
+            continue;
+        };
+        let mut faces = Vec::new();
+        let mut before = Vec::new();
+        for (corner, at) in [(base_corner, base_at), (3 * f + apex, apex_at)] {
+            for &c in vertices.group(corner) {
+                let (g, j) = (c as usize / 3, c as usize % 3);
+                before.push((c as usize, corner_uvs[g][j]));
+                corner_uvs[g][j] = at;
+                faces.push(g as u32);
+            }
+        }
+        faces.sort_unstable();
+        faces.dedup();
+        moves.push(BaseMove { faces, before });
+    }
+    if moves.is_empty() {
+        return 0;
+    }
+    let folded = folds(corner_uvs);
+    let mut undone_faces: Vec<u32> = Vec::new();
+    let undo: Vec<bool> = moves
+        .iter()
+        .map(|m| {
+            let hit = m
+                .faces
+                .iter()
+                .any(|f| folded.binary_search(f).is_ok() || undone_faces.binary_search(f).is_ok());
+            if hit {
+                undone_faces.extend(&m.faces);
+                undone_faces.sort_unstable();
+                undone_faces.dedup();
+            }
+            hit
+        })
+        .collect();
+    for (m, _) in moves.iter().zip(&undo).rev().filter(|(_, &u)| u) {
+        for &(c, at) in m.before.iter().rev() {
+            corner_uvs[c / 3][c % 3] = at;
+        }
+    }
+    2 * undo.iter().filter(|&&u| !u).count()
+}
+
+/// The base search of the module doc for the sliver `f` with apex corner `apex`: the move of one
+/// base vertex (`BASE_SEARCH_ULPS`) and of the apex (to the 3 × 3 `f32` points nearest the
+/// place its 3-D shape asks for over the moved base) after which the largest L∞ of the faces at
+/// both vertices is least, when below today's and every one of them (3-D-degenerate ones
+/// excepted) stays non-degenerate and oriented as its chart. Returns the base corner moved and
+/// the two new positions.
+fn search_base(
+    mesh: &TriangleMesh,
+    check: &OrientationCheck,
+    vertices: &UvVertices,
+    corner_uvs: &[[[f32; 2]; 3]],
+    (f, apex): (usize, usize),
+    k: f64,
+) -> Option<(usize, [f32; 2], [f32; 2])> {
+    let used = |g: usize| !check.uv_degenerate[g] && !check.degenerate_3d[g];
+    let q = mesh.face_positions(FaceId(f as u32));
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    // The apex over the base (corners apex+1 → apex+2, the face's own order): its place along
+    // the base and its height, as fractions of the base length, on the chart's side.
+    let (ia, ib) = ((apex + 1) % 3, (apex + 2) % 3);
+    let (e, w) = (sub(q[ib], q[ia]), sub(q[apex], q[ia]));
+    let len2 = dot(e, e);
+    let cross = [
+        e[1] * w[2] - e[2] * w[1],
+        e[2] * w[0] - e[0] * w[2],
+        e[0] * w[1] - e[1] * w[0],
+    ];
+    let (along, height) = (dot(e, w) / len2, dot(cross, cross).sqrt() / len2);
+    if !(along.is_finite() && height.is_finite() && len2 > 0.0) {
+        return None;
+    }
+    let side = if check.chart_positive[check.chart_of_face[f] as usize] {
+        1.0
+    } else {
+        -1.0
+    };
+    let target = |a: [f64; 2], b: [f64; 2]| {
+        let d = [b[0] - a[0], b[1] - a[1]];
+        [
+            a[0] + along * d[0] - side * height * d[1],
+            a[1] + along * d[1] + side * height * d[0],
+        ]
+    };
+    let apex_group = vertices.group(3 * f + apex);
+    let mut best: Option<(f64, usize, [f32; 2], [f32; 2])> = None;
+    for base in [ia, ib] {
+        let base_group = vertices.group(3 * f + base);
+        if base_group
+            .iter()
+            .chain(apex_group)
+            .any(|&c| check.degenerate_3d[c as usize / 3])
+        {
+            continue;
+        }
+        // Every corner of a face at either vertex, with which of the two it is (if any).
+        let mut faces: Vec<usize> = base_group
+            .iter()
+            .chain(apex_group)
+            .map(|&c| c as usize / 3)
+            .collect();
+        faces.sort_unstable();
+        faces.dedup();
+        let is_base = |c: usize| base_group.binary_search(&(c as u32)).is_ok();
+        let is_apex = |c: usize| apex_group.binary_search(&(c as u32)).is_ok();
+        // The largest L∞ over those faces with the two vertices at `at_base`, `at_apex`, or
+        // None when one of them would be degenerate or turned against its chart.
+        let shape = |at_base: [f32; 2], at_apex: [f32; 2]| -> Option<f64> {
+            let mut worst = 0.0f64;
+            for &g in &faces {
+                let mut t = corner_uvs[g];
+                for (j, corner) in t.iter_mut().enumerate() {
+                    if is_base(3 * g + j) {
+                        *corner = at_base;
+                    } else if is_apex(3 * g + j) {
+                        *corner = at_apex;
+                    }
+                }
+                if check.degenerate_3d[g] {
+                    continue;
+                }
+                if !oriented(check, g, &t) {
+                    return None;
+                }
+                if used(g) {
+                    worst = worst.max(face_linf(mesh, g, &t, k));
+                }
+            }
+            Some(worst)
+        };
+        let (b0, c0) = (corner_uvs[f][base], corner_uvs[f][apex]);
+        // Below today's largest L∞ of these faces, and below the best found so far.
+        let Some(today) = shape(b0, c0) else {
+            continue;
+        };
+        let bar = best.map_or(today, |b| b.0.min(today));
+        let (su, sv) = (f32_spacing(b0[0]), f32_spacing(b0[1]));
+        let r = BASE_SEARCH_ULPS;
+        for i in -r..=r {
+            for j in -r..=r {
+                if i == 0 && j == 0 {
+                    continue;
+                }
+                let at_base = [
+                    (f64::from(b0[0]) + f64::from(i) * su) as f32,
+                    (f64::from(b0[1]) + f64::from(j) * sv) as f32,
+                ];
+                if !at_base.iter().all(|x| x.is_finite()) {
+                    continue;
+                }
+                let mut ends = [corner_uvs[f][ia], corner_uvs[f][ib]].map(|p| p.map(f64::from));
+                ends[usize::from(base == ib)] = at_base.map(f64::from);
+                let aim = target(ends[0], ends[1]);
+                let near = [aim[0] as f32, aim[1] as f32];
+                let (au, av) = (f32_spacing(near[0]), f32_spacing(near[1]));
+                for di in -1..=1 {
+                    for dj in -1..=1 {
+                        let at_apex = [
+                            (f64::from(near[0]) + f64::from(di) * au) as f32,
+                            (f64::from(near[1]) + f64::from(dj) * av) as f32,
+                        ];
+                        // The sliver alone first: most shapes fail there.
+                        let mut t = corner_uvs[f];
+                        t[base] = at_base;
+                        t[apex] = at_apex;
+                        let own = face_linf(mesh, f, &t, k);
+                        if own >= best.map_or(bar, |b| b.0) {
+                            continue;
+                        }
+                        if let Some(worst) = shape(at_base, at_apex) {
+                            if worst < best.map_or(bar, |b| b.0) {
+                                best = Some((worst, 3 * f + base, at_base, at_apex));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    best.map(|(_, corner, at_base, at_apex)| (corner, at_base, at_apex))
 }
 
 /// The apex corner (opposite the longest UV edge) of face `f` when `f` is thin (UV height below
@@ -200,7 +458,7 @@ mod tests {
             "the setup is a sliver with a high L∞: {before}"
         );
         let check = orientation_check(&mesh, &uvs, &[0, 0]);
-        let moved = restore_slivers(&mesh, &check, &mut uvs, &[0, 0], [64, 64]);
+        let moved = restore_slivers(&mesh, &check, &mut uvs, &[0, 0], [64, 64], &|_| Vec::new());
         let after = face_linf(&mesh, 0, &uvs[0], k);
         assert_eq!(moved, 1);
         assert!(after < before / 2.0, "L∞ {before} -> {after}");
@@ -209,5 +467,77 @@ mod tests {
         assert_eq!(uvs[1], [f32s(b), f32s(a), f32s(d)]);
         let check = orientation_check(&mesh, &uvs, &[0, 0]);
         assert!(!check.flipped(0) && !check.uv_degenerate[0]);
+    }
+
+    /// A sliver whose height is a few hundredths of an `f32` spacing: no `f32` point near its
+    /// apex has both its height and its place along the base, so a base vertex moves too,
+    /// unless the fold check says no.
+    #[test]
+    fn a_sliver_thinner_than_the_apex_can_reach_moves_a_base_vertex_too() {
+        // Height 2e-8 under a 10 m edge at scale 0.05: 1e-9 in UV, 1/30 of a spacing (2^-25).
+        let mesh = build(&MeshInput::single_group(
+            vec![
+                [0.0, 0.0, 0.0],
+                [10.0, 0.0, 0.0],
+                [3.7, 2e-8, 0.0],
+                [5.0, -5.0, 0.0],
+            ],
+            vec![[0, 1, 2], [1, 0, 3]],
+        ));
+        let (c, s) = (0.06f64.cos() * 0.05, 0.06f64.sin() * 0.05);
+        let map = |p: [f64; 2]| [0.1 + c * p[0] - s * p[1], 0.3 + s * p[0] + c * p[1]];
+        let f32s = |q: [f64; 2]| [q[0] as f32, q[1] as f32];
+        let (a, b, d) = (map([0.0, 0.0]), map([10.0, 0.0]), map([5.0, -5.0]));
+        let along = map([3.7, 0.0]);
+        let n = [-s / 0.05, c / 0.05];
+        let spacing = 2f64.powi(-25);
+        let apex = [
+            along[0] + 2.0 * spacing * n[0],
+            along[1] + 2.0 * spacing * n[1],
+        ];
+        let start = [[f32s(a), f32s(b), f32s(apex)], [f32s(b), f32s(a), f32s(d)]];
+        let k = {
+            let a2 = |t: &[[f32; 2]; 3]| {
+                let w = t.map(|p| p.map(f64::from));
+                0.5 * ((w[1][0] - w[0][0]) * (w[2][1] - w[0][1])
+                    - (w[2][0] - w[0][0]) * (w[1][1] - w[0][1]))
+                    .abs()
+            };
+            (a2(&start[0]) + a2(&start[1]))
+                / (mesh.face_area_m2(FaceId(0)) + mesh.face_area_m2(FaceId(1)))
+        };
+        let before = face_linf(&mesh, 0, &start[0], k);
+        let check = orientation_check(&mesh, &start, &[0, 0]);
+        // The apex alone (a fold check that refuses every base move) leaves it above the bar.
+        let mut apex_only = start;
+        restore_slivers(&mesh, &check, &mut apex_only, &[0, 0], [64, 64], &|_| {
+            vec![0, 1]
+        });
+        let apex_alone = face_linf(&mesh, 0, &apex_only[0], k);
+        assert!(
+            apex_alone > BASE_SEARCH_ABOVE_LINF,
+            "the setup needs the base search: L∞ {before} -> {apex_alone} by the apex alone"
+        );
+        assert_eq!(
+            apex_only[1], start[1],
+            "an undone base move leaves the big face"
+        );
+        // With the base search kept: far lower, a base vertex moved by at most
+        // BASE_SEARCH_ULPS spacings, both faces oriented as before.
+        let mut uvs = start;
+        let moved = restore_slivers(&mesh, &check, &mut uvs, &[0, 0], [64, 64], &|_| Vec::new());
+        let after = face_linf(&mesh, 0, &uvs[0], k);
+        assert!(moved >= 2);
+        assert!(after < apex_alone / 2.0, "L∞ {apex_alone} -> {after}");
+        for (p, q) in uvs[0][..2].iter().zip(&start[0][..2]) {
+            for axis in 0..2 {
+                let ulps = (f64::from(p[axis]) - f64::from(q[axis])).abs() / f32_spacing(q[axis]);
+                assert!(ulps <= f64::from(BASE_SEARCH_ULPS) + 0.5, "{ulps} spacings");
+            }
+        }
+        assert_eq!(uvs[1][2], start[1][2], "the big face's own vertex stays");
+        let check = orientation_check(&mesh, &uvs, &[0, 0]);
+        assert!(!check.flipped(0) && !check.flipped(1));
+        assert!(!check.uv_degenerate[0] && !check.uv_degenerate[1]);
     }
 }
