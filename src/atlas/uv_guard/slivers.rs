@@ -15,11 +15,12 @@
 //! The apex alone often cannot do it: the height asked for can be a tenth of a spacing, and
 //! the apex must also sit within about that height of its place along the base (a shear of
 //! `δ / h` otherwise), a target a few hundredths of a spacing cell wide, which the `f32`
-//! points around the apex rarely hit. When the face is still above [`BASE_SEARCH_ABOVE_LINF`], one base
-//! vertex at a time is moved too ([`BASE_SEARCH_ULPS`]): each move shifts the apex's target
-//! against the `f32` grid by a fraction of a spacing, and the apex is tried at the `f32`
-//! points nearest that target. The faces at both vertices are measured and checked as for the
-//! apex alone.
+//! points around the apex rarely hit. When the face is still above
+//! [`BASE_SEARCH_ABOVE_LINF`], one base vertex at a time is moved too ([`BASE_SEARCH_ULPS`]):
+//! each move shifts the apex's target against the `f32` grid by a fraction of a spacing, and
+//! the apex is tried at the `f32` points nearest that target. The faces at both vertices are
+//! measured and checked as for the apex alone; a base move after which one of them covers a
+//! texel centre of another face of its chart (the report's sampling) is undone.
 use super::{f32_spacing, moves_fine, oriented, UvVertices};
 use crate::atlas::measure::{face_metric, OrientationCheck};
 use crate::mesh::{FaceId, TriangleMesh};
@@ -180,8 +181,9 @@ struct BaseMove {
 }
 
 /// The second pass of [`restore_slivers`]: the base search ([`search_base`]) on each thin face
-/// `still` above [`BASE_SEARCH_ABOVE_LINF`] after the first (with its apex corner; ascending), at most
-/// [`BASE_SEARCHES_MAX`]; `vertices` are the UV vertices of `corner_uvs`. Then a move
+/// `still` above [`BASE_SEARCH_ABOVE_LINF`] after the first (with its apex corner;
+/// ascending), at most [`BASE_SEARCHES_MAX`]; `vertices` are the UV vertices of `corner_uvs`.
+/// Then a move
 /// whose faces `folds` finds covering a texel centre of another face of their chart (the
 /// report's sampling, which a sliver thinner than its rounding can cross) is undone, as is
 /// every later move that shares a face with an undone one (its checks saw the undone
