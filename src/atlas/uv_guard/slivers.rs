@@ -418,18 +418,22 @@ mod tests {
     use super::*;
     use crate::atlas::measure::orientation_check;
     use crate::atlas::segment::tests::build;
-    use crate::mesh::MeshInput;
+    use crate::mesh::{MeshInput, TriangleMesh};
 
-    #[test]
-    fn a_sliver_whose_rounded_apex_sits_too_high_gets_it_back_near_its_height() {
-        // A sliver (height 2e-7 under a 10 m edge) beside a big face, both mapped by one
-        // similarity (scale 0.05, turned off the axes), written as f32: the sliver's apex put
-        // 3 spacings off its base (its 3-D height asks for a third of one).
+    /// A sliver (corners 0, 1, 2: a 10 m edge along x, its apex at `(apex_x, height_m)`) beside
+    /// a big face (1, 0, 3), both mapped by one similarity (scale 0.05, turned off the axes) and
+    /// written as `f32`, the sliver's apex put `off` spacings (2^-25, of `f32` in [0.25, 0.5),
+    /// where it lies) off its base; with the atlas scale `k` (UV area over 3-D area).
+    fn sliver_beside_big_face(
+        apex_x: f64,
+        height_m: f64,
+        off: f64,
+    ) -> (TriangleMesh, [[[f32; 2]; 3]; 2], f64) {
         let mesh = build(&MeshInput::single_group(
             vec![
                 [0.0, 0.0, 0.0],
                 [10.0, 0.0, 0.0],
-                [5.0, 2e-7, 0.0],
+                [apex_x, height_m, 0.0],
                 [5.0, -5.0, 0.0],
             ],
             vec![[0, 1, 2], [1, 0, 3]],
@@ -438,22 +442,31 @@ mod tests {
         let map = |p: [f64; 2]| [0.1 + c * p[0] - s * p[1], 0.3 + s * p[0] + c * p[1]];
         let f32s = |q: [f64; 2]| [q[0] as f32, q[1] as f32];
         let (a, b, d) = (map([0.0, 0.0]), map([10.0, 0.0]), map([5.0, -5.0]));
-        let mid = map([5.0, 0.0]);
-        let n = [-s / 0.05, c / 0.05];
-        let spacing = 2f64.powi(-25); // of f32 in [0.25, 0.5), where the apex lies
-        assert!((0.25..0.5).contains(&mid[0]) && (0.25..0.5).contains(&mid[1]));
-        let apex = [mid[0] + 3.0 * spacing * n[0], mid[1] + 3.0 * spacing * n[1]];
-        let mut uvs = [[f32s(a), f32s(b), f32s(apex)], [f32s(b), f32s(a), f32s(d)]];
-        let k = {
-            let a2 = |t: &[[f32; 2]; 3]| {
-                let w = t.map(|p| p.map(f64::from));
-                0.5 * ((w[1][0] - w[0][0]) * (w[2][1] - w[0][1])
-                    - (w[2][0] - w[0][0]) * (w[1][1] - w[0][1]))
-                    .abs()
-            };
-            (a2(&uvs[0]) + a2(&uvs[1]))
-                / (mesh.face_area_m2(FaceId(0)) + mesh.face_area_m2(FaceId(1)))
+        let foot = map([apex_x, 0.0]);
+        assert!((0.25..0.5).contains(&foot[0]) && (0.25..0.5).contains(&foot[1]));
+        let (n, spacing) = ([-s / 0.05, c / 0.05], 2f64.powi(-25));
+        let apex = [
+            foot[0] + off * spacing * n[0],
+            foot[1] + off * spacing * n[1],
+        ];
+        let uvs = [[f32s(a), f32s(b), f32s(apex)], [f32s(b), f32s(a), f32s(d)]];
+        let a2 = |t: &[[f32; 2]; 3]| {
+            let w = t.map(|p| p.map(f64::from));
+            0.5 * ((w[1][0] - w[0][0]) * (w[2][1] - w[0][1])
+                - (w[2][0] - w[0][0]) * (w[1][1] - w[0][1]))
+                .abs()
         };
+        let k = (a2(&uvs[0]) + a2(&uvs[1]))
+            / (mesh.face_area_m2(FaceId(0)) + mesh.face_area_m2(FaceId(1)));
+        (mesh, uvs, k)
+    }
+
+    #[test]
+    fn a_sliver_whose_rounded_apex_sits_too_high_gets_it_back_near_its_height() {
+        // Height 2e-7 under the 10 m edge: its apex 3 spacings off its base, where its 3-D
+        // height asks for a third of one.
+        let (mesh, start, k) = sliver_beside_big_face(5.0, 2e-7, 3.0);
+        let mut uvs = start;
         let before = face_linf(&mesh, 0, &uvs[0], k);
         assert!(
             before > 4.0,
@@ -465,8 +478,8 @@ mod tests {
         assert_eq!(moved, 1);
         assert!(after < before / 2.0, "L∞ {before} -> {after}");
         // Only the apex moved, and both faces keep the big face's orientation.
-        assert_eq!(uvs[0][..2], [f32s(a), f32s(b)]);
-        assert_eq!(uvs[1], [f32s(b), f32s(a), f32s(d)]);
+        assert_eq!(uvs[0][..2], start[0][..2]);
+        assert_eq!(uvs[1], start[1]);
         let check = orientation_check(&mesh, &uvs, &[0, 0]);
         assert!(!check.flipped(0) && !check.uv_degenerate[0]);
     }
@@ -476,38 +489,8 @@ mod tests {
     /// unless the fold check says no.
     #[test]
     fn a_sliver_thinner_than_the_apex_can_reach_moves_a_base_vertex_too() {
-        // Height 2e-8 under a 10 m edge at scale 0.05: 1e-9 in UV, 1/30 of a spacing (2^-25).
-        let mesh = build(&MeshInput::single_group(
-            vec![
-                [0.0, 0.0, 0.0],
-                [10.0, 0.0, 0.0],
-                [3.7, 2e-8, 0.0],
-                [5.0, -5.0, 0.0],
-            ],
-            vec![[0, 1, 2], [1, 0, 3]],
-        ));
-        let (c, s) = (0.06f64.cos() * 0.05, 0.06f64.sin() * 0.05);
-        let map = |p: [f64; 2]| [0.1 + c * p[0] - s * p[1], 0.3 + s * p[0] + c * p[1]];
-        let f32s = |q: [f64; 2]| [q[0] as f32, q[1] as f32];
-        let (a, b, d) = (map([0.0, 0.0]), map([10.0, 0.0]), map([5.0, -5.0]));
-        let along = map([3.7, 0.0]);
-        let n = [-s / 0.05, c / 0.05];
-        let spacing = 2f64.powi(-25);
-        let apex = [
-            along[0] + 2.0 * spacing * n[0],
-            along[1] + 2.0 * spacing * n[1],
-        ];
-        let start = [[f32s(a), f32s(b), f32s(apex)], [f32s(b), f32s(a), f32s(d)]];
-        let k = {
-            let a2 = |t: &[[f32; 2]; 3]| {
-                let w = t.map(|p| p.map(f64::from));
-                0.5 * ((w[1][0] - w[0][0]) * (w[2][1] - w[0][1])
-                    - (w[2][0] - w[0][0]) * (w[1][1] - w[0][1]))
-                    .abs()
-            };
-            (a2(&start[0]) + a2(&start[1]))
-                / (mesh.face_area_m2(FaceId(0)) + mesh.face_area_m2(FaceId(1)))
-        };
+        // Height 2e-8 under the 10 m edge: 1e-9 in UV, 1/30 of a spacing; the apex 2 off.
+        let (mesh, start, k) = sliver_beside_big_face(3.7, 2e-8, 2.0);
         let before = face_linf(&mesh, 0, &start[0], k);
         let check = orientation_check(&mesh, &start, &[0, 0]);
         // The apex alone (a fold check that refuses every base move) leaves it above the bar.
