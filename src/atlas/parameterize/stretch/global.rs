@@ -81,14 +81,18 @@ pub(super) fn energy(
             continue;
         };
         let q = t.map(|i| uv[i as usize]);
-        let terms = face_terms(&frame, q)?;
-        sum_det += terms.det;
-        sum_e += terms.e;
-        big_max = big_max.max(terms.big);
-        small_min = small_min.min(terms.small);
-        if want {
+        let (det, e, big, small) = if want {
+            let terms = face_terms(&frame, q)?;
             scratch.push((*t, terms.ddet, terms.de));
-        }
+            (terms.det, terms.e, terms.big, terms.small)
+        } else {
+            let core = face_core(&frame, q)?;
+            (core.det, core.e, core.big, core.small)
+        };
+        sum_det += det;
+        sum_e += e;
+        big_max = big_max.max(big);
+        small_min = small_min.min(small);
     }
     if let Some(g) = grad {
         g.iter_mut().for_each(|x| *x = [0.0; 2]);
@@ -119,8 +123,23 @@ struct FaceTerms {
     small: f64,
 }
 
-/// One face's [`FaceTerms`]; `None` when the UV triangle is not positively oriented.
-fn face_terms(frame: &FrameFace, q: [[f64; 2]; 3]) -> Option<FaceTerms> {
+/// One face's value terms: `2·A2` (`det`), `A3·|M|²/2` (`e`), `Γ ≥ γ` of `M`, and what the
+/// gradient of [`face_terms`] needs (`u1`, `u2`, `1/det`, `M`). `None` when the UV triangle is
+/// not positively oriented. The line search needs only the values: it calls this alone.
+struct FaceCore {
+    u1: [f64; 2],
+    u2: [f64; 2],
+    det: f64,
+    inv: f64,
+    m: [f64; 4],
+    e: f64,
+    big: f64,
+    small: f64,
+}
+
+/// One face's [`FaceCore`].
+#[inline]
+fn face_core(frame: &FrameFace, q: [[f64; 2]; 3]) -> Option<FaceCore> {
     let u1 = sub2(q[1], q[0]);
     let u2 = sub2(q[2], q[0]);
     let det = u1[0] * u2[1] - u1[1] * u2[0];
@@ -135,6 +154,35 @@ fn face_terms(frame: &FrameFace, q: [[f64; 2]; 3]) -> Option<FaceTerms> {
     let m11 = frame.y2 * u1[0] * inv;
     let norm2 = m00 * m00 + m01 * m01 + m10 * m10 + m11 * m11;
     let e = 0.5 * frame.a3 * norm2;
+    // Singular values as in `FrameFace::singular_values`.
+    let (ce, cf) = (0.5 * (m00 + m11), 0.5 * (m00 - m11));
+    let (cg, ch) = (0.5 * (m10 + m01), 0.5 * (m10 - m01));
+    let big = (ce * ce + ch * ch).sqrt() + (cf * cf + cg * cg).sqrt();
+    let small = frame.l1 * frame.y2 * inv / big;
+    (e.is_finite() && big.is_finite() && small > 0.0).then_some(FaceCore {
+        u1,
+        u2,
+        det,
+        inv,
+        m: [m00, m01, m10, m11],
+        e,
+        big,
+        small,
+    })
+}
+
+/// One face's [`FaceTerms`]; `None` when the UV triangle is not positively oriented.
+fn face_terms(frame: &FrameFace, q: [[f64; 2]; 3]) -> Option<FaceTerms> {
+    let FaceCore {
+        u1,
+        u2,
+        det,
+        inv,
+        m: [m00, m01, m10, m11],
+        e,
+        big,
+        small,
+    } = face_core(frame, q)?;
     // d|M|²/dP = −2·MᵀM·P⁻ᵀ; N = MᵀM.
     let n00 = m00 * m00 + m10 * m10;
     let n01 = m00 * m01 + m10 * m11;
@@ -153,12 +201,7 @@ fn face_terms(frame: &FrameFace, q: [[f64; 2]; 3]) -> Option<FaceTerms> {
     let dd2 = [-u1[1], u1[0]];
     let de = [[-de1[0] - de2[0], -de1[1] - de2[1]], de1, de2];
     let ddet = [[-dd1[0] - dd2[0], -dd1[1] - dd2[1]], dd1, dd2];
-    // Singular values as in `FrameFace::singular_values`.
-    let (ce, cf) = (0.5 * (m00 + m11), 0.5 * (m00 - m11));
-    let (cg, ch) = (0.5 * (m10 + m01), 0.5 * (m10 - m01));
-    let big = (ce * ce + ch * ch).sqrt() + (cf * cf + cg * cg).sqrt();
-    let small = frame.l1 * frame.y2 * inv / big;
-    (e.is_finite() && big.is_finite() && small > 0.0).then_some(FaceTerms {
+    Some(FaceTerms {
         det,
         e,
         ddet,
@@ -362,7 +405,7 @@ pub(super) fn descend(st: &State<'_>, uv: &mut [[f64; 2]], linf_cap: f64) -> usi
     for _ in 0..GLOBAL_STEPS {
         let gx: Vec<f64> = grad.iter().map(|g| -g[0]).collect();
         let gy: Vec<f64> = grad.iter().map(|g| -g[1]).collect();
-        let (Ok(dx), Ok(dy)) = (chol.solve(&gx), chol.solve(&gy)) else {
+        let Ok((dx, dy)) = chol.solve_pair(&gx, &gy) else {
             break;
         };
         let d: Vec<[f64; 2]> = dx.iter().zip(&dy).map(|(&x, &y)| [x, y]).collect();
@@ -383,11 +426,17 @@ pub(super) fn descend(st: &State<'_>, uv: &mut [[f64; 2]], linf_cap: f64) -> usi
             None => hi.min(1.0),
         };
         let mut accepted: Option<f64> = None;
-        for _ in 0..GLOBAL_BACKTRACKS {
+        // The first try, usually the one kept, also computes its gradient (into `grad`, which
+        // the line search no longer reads), so that a kept first try needs no second pass.
+        let mut grad_at_cand = false;
+        for k in 0..GLOBAL_BACKTRACKS {
             for (c, (p, dv)) in cand.iter_mut().zip(uv.iter().zip(&d)) {
                 *c = [p[0] + t * dv[0], p[1] + t * dv[1]];
             }
-            if let Some(ec) = energy(st, &cand, None, &mut scratch) {
+            let want_grad = k == 0;
+            let value = energy(st, &cand, want_grad.then_some(&mut grad[..]), &mut scratch);
+            grad_at_cand = want_grad && value.is_some();
+            if let Some(ec) = value {
                 if ec.value <= e + ARMIJO * t * slope
                     && ec.linf(st.a3_total) <= linf_cap
                     && boundary_ok(st, &cand)
@@ -412,9 +461,13 @@ pub(super) fn descend(st: &State<'_>, uv: &mut [[f64; 2]], linf_cap: f64) -> usi
         steps += 1;
         t_prev = Some(t);
         let gain = e - ec;
-        e = match energy(st, uv, Some(&mut grad), &mut scratch) {
-            Some(x) => x.value,
-            None => break,
+        e = if grad_at_cand {
+            ec
+        } else {
+            match energy(st, uv, Some(&mut grad), &mut scratch) {
+                Some(x) => x.value,
+                None => break,
+            }
         };
         if gain < GLOBAL_MIN_GAIN * ec {
             break;
