@@ -120,55 +120,39 @@ impl SparseCholesky {
 
     /// Solves `A·x = b`, returning `x`.
     pub fn solve(&self, b: &[f64]) -> Result<Vec<f64>, CholeskyError> {
-        self.solve_with(b, PAR)
+        self.solve_with(&[b], PAR)
     }
 
     /// Solves `A·x = b` and `A·y = c` in one pass over `L`: the same results, bit for bit, as two
     /// calls of [`Self::solve`] (each right-hand side takes the same operations in the same
     /// order), at less than twice the cost of one.
     pub fn solve_pair(&self, b: &[f64], c: &[f64]) -> Result<(Vec<f64>, Vec<f64>), CholeskyError> {
-        for rhs in [b, c] {
-            if rhs.len() != self.n {
-                return Err(CholeskyError::DimensionMismatch {
-                    expected: self.n,
-                    got: rhs.len(),
-                });
-            }
-        }
-        let mut x = Vec::with_capacity(2 * self.n);
-        x.extend_from_slice(b);
-        x.extend_from_slice(c);
-        let scratch = self.symbolic.solve_in_place_scratch::<f64>(2, PAR);
-        let mut buffer = MemBuffer::try_new(scratch).map_err(|e| CholeskyError::Resource {
-            detail: format!("{e:?}"),
-        })?;
-        let llt = LltRef::<'_, usize, f64>::new(&self.symbolic, &self.values);
-        llt.solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(&mut x, self.n, 2),
-            PAR,
-            MemStack::new(&mut buffer),
-        );
+        let mut x = self.solve_with(&[b, c], PAR)?;
         let y = x.split_off(self.n);
         Ok((x, y))
     }
 
-    fn solve_with(&self, b: &[f64], par: Par) -> Result<Vec<f64>, CholeskyError> {
-        if b.len() != self.n {
-            return Err(CholeskyError::DimensionMismatch {
-                expected: self.n,
-                got: b.len(),
-            });
+    /// The solutions of `A·x = r` for every right-hand side `r` of `rhs`, one after the other
+    /// (column-major), from one pass over `L`.
+    fn solve_with(&self, rhs: &[&[f64]], par: Par) -> Result<Vec<f64>, CholeskyError> {
+        let mut x = Vec::with_capacity(rhs.len() * self.n);
+        for r in rhs {
+            if r.len() != self.n {
+                return Err(CholeskyError::DimensionMismatch {
+                    expected: self.n,
+                    got: r.len(),
+                });
+            }
+            x.extend_from_slice(r);
         }
-        let mut x = b.to_vec();
-        let scratch = self.symbolic.solve_in_place_scratch::<f64>(1, par);
+        let scratch = self.symbolic.solve_in_place_scratch::<f64>(rhs.len(), par);
         let mut buffer = MemBuffer::try_new(scratch).map_err(|e| CholeskyError::Resource {
             detail: format!("{e:?}"),
         })?;
         let llt = LltRef::<'_, usize, f64>::new(&self.symbolic, &self.values);
         llt.solve_in_place_with_conj(
             Conj::No,
-            MatMut::from_column_major_slice_mut(&mut x, self.n, 1),
+            MatMut::from_column_major_slice_mut(&mut x, self.n, rhs.len()),
             par,
             MemStack::new(&mut buffer),
         );
@@ -558,9 +542,9 @@ mod tests {
         let a = grid(60);
         let b: Vec<f64> = (0..3600).map(|i| (i % 7) as f64 - 3.0).collect();
         let seq = SparseCholesky::factor_with(&a, Par::Seq).expect("spd");
-        let xs = seq.solve_with(&b, Par::Seq).expect("shape");
+        let xs = seq.solve_with(&[&b], Par::Seq).expect("shape");
         let par = SparseCholesky::factor_with(&a, Par::rayon(2)).expect("spd");
-        let xp = par.solve_with(&b, Par::rayon(2)).expect("shape");
+        let xp = par.solve_with(&[&b], Par::rayon(2)).expect("shape");
         // Sequential is what production uses; this records whether faer's parallel path
         // happens to agree bit for bit (it does on this input with faer 0.24).
         assert!(xs.iter().zip(&xp).all(|(p, q)| p.to_bits() == q.to_bits()));
