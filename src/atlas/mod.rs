@@ -390,7 +390,7 @@ fn pack_and_write(
                 pack_charts_of(parameterized, &packed, &chart_triangles, &chart_area_m2);
             pack_charts(
                 &pack_input,
-                &options.pack,
+                &packing_cuts::pack_options(mesh, options),
                 &mut StageProgress::new(Stage::Pack, progress),
             )?
         }

@@ -8,7 +8,10 @@
 use super::error::AtlasError;
 use super::options::AtlasOptions;
 use super::pack::place::{box_waste_m2, neck_cut};
-use super::pack::{pack_charts_cached, pack_one_page, PackCache, PackChart, Packing, TexelDensity};
+use super::pack::{
+    pack_charts_cached, pack_one_page, FirstPacker, PackCache, PackChart, PackOptions, Packing,
+    TexelDensity,
+};
 use super::pack_input::{pack_charts_of, pack_inputs};
 use super::parameterize;
 use super::progress::{Stage, StageProgress};
@@ -57,6 +60,29 @@ const PACKING_CUT_MIN_GAIN: f64 = 0.02;
 /// cuts per chart; on low-poly meshes one cut, with a validation).
 const PACKING_CUT_MAX_TRIES: usize = 4;
 
+/// Whether the packing-aware cuts apply to `mesh` with `options`: fit-to-page packing of at most
+/// [`PACKING_CUT_MAX_FACES`] faces.
+fn cuts_apply(mesh: &TriangleMesh, options: &AtlasOptions) -> bool {
+    options.pack.density == TexelDensity::FitToPage && mesh.num_faces() <= PACKING_CUT_MAX_FACES
+}
+
+/// The pack options of every packing of `mesh`: `options.pack`, searching with the horizons
+/// first ([`FirstPacker::Horizons`]) on the meshes the cuts apply to, whose choices of cuts were
+/// measured that way. With hole filling first inside the cuts' loop, other cuts are kept and
+/// the packing moves both ways: craft_speederD 0.681 → 0.625, cakeBirthday 0.686 → 0.664,
+/// DepthOfFieldExample 0.711 → 0.736, spot 0.639 → 0.652, fandisk 0.720 → 0.732. A packing
+/// after the cuts (a repack of the UV guard) searches as they did.
+pub(super) fn pack_options(mesh: &TriangleMesh, options: &AtlasOptions) -> PackOptions {
+    if cuts_apply(mesh, options) {
+        PackOptions {
+            first_packer: FirstPacker::Horizons,
+            ..options.pack
+        }
+    } else {
+        options.pack
+    }
+}
+
 /// Packing-aware cuts (issue 21's packing target, 0.72; 0.61 on low-poly meshes): when the
 /// atlas has few charts and packs poorly (a strip, a disc or a chart with long arms wastes
 /// much of a square page), the chart that wastes the most space in its minimum-area rectangle
@@ -83,9 +109,10 @@ pub(super) fn cut_for_packing(
     validated: parameterize::ParameterizedCharts,
     options: &AtlasOptions,
 ) -> Result<(parameterize::ParameterizedCharts, usize, Option<Packing>), AtlasError> {
-    if options.pack.density != TexelDensity::FitToPage || mesh.num_faces() > PACKING_CUT_MAX_FACES {
+    if !cuts_apply(mesh, options) {
         return Ok((validated, 0, None));
     }
+    let pack_options = pack_options(mesh, options);
     let page = f64::from(options.pack.width_texels) * f64::from(options.pack.height_texels);
     let low_poly = mesh.num_faces() <= LOW_POLY_MAX_FACES;
     let below = if low_poly {
@@ -120,7 +147,7 @@ pub(super) fn cut_for_packing(
         let input = pack_charts_of(v, &packed, &inputs.triangles, &inputs.area_m2);
         let packing = pack_charts_cached(
             &input,
-            &options.pack,
+            &pack_options,
             start,
             &cache,
             &mut StageProgress::ignored(Stage::Pack),
@@ -146,7 +173,7 @@ pub(super) fn cut_for_packing(
         let density = (goal * page / total).sqrt();
         let input = pack_charts_of(v, &packed, &inputs.triangles, &inputs.area_m2);
         cache.pin(density);
-        Ok(pack_one_page(&input, &options.pack, density, Some(&cache))?.map(|p| (density, p)))
+        Ok(pack_one_page(&input, &pack_options, density, Some(&cache))?.map(|p| (density, p)))
     };
     // A candidate's efficiency and packing when they beat `best` by `PACKING_CUT_MIN_GAIN`: the
     // full search runs only when the candidate fits at the efficiency that would keep it.

@@ -5,9 +5,9 @@
 //! (collinear triangles, single points, point triangles, a square with a zero-area triangle,
 //! charts of zero 3-D area), whose linear sizes span two orders of magnitude, each handed over at
 //! an arbitrary UV scale (1e-3 to 1e3), rotation and offset; pages of 64–256 texels a side,
-//! padding 0–3, 1, 4, 7 or 16 rotations; [`TexelDensity::FitToPage`] and
-//! [`TexelDensity::TexelsPerUnit`] at densities that need up to about three pages (capped so
-//! that every chart fits on a page alone in any orientation).
+//! padding 0–3, 1, 4, 7 or 16 rotations; [`TexelDensity::FitToPage`] (with either
+//! [`FirstPacker`]) and [`TexelDensity::TexelsPerUnit`] at densities that need up to about
+//! three pages (capped so that every chart fits on a page alone in any orientation).
 //!
 //! Only the public contract is used (`pack_charts` and its types), and the checker here
 //! shares no code with the packer or with `test_charts`: it rasterizes each placed triangle by
@@ -35,7 +35,7 @@ use std::sync::OnceLock;
 
 use proptest::prelude::*;
 
-use super::{pack_charts, PackChart, PackOptions, Packing, TexelDensity};
+use super::{pack_charts, FirstPacker, PackChart, PackOptions, Packing, TexelDensity};
 use crate::atlas::{Stage, StageProgress};
 
 /// A chart that owns its data.
@@ -323,6 +323,7 @@ struct Setup {
     rotations: u32,
     /// `None`: fit to the page.
     fill: Option<f64>,
+    first_packer: FirstPacker,
 }
 
 fn page_side() -> impl Strategy<Value = u32> {
@@ -341,14 +342,16 @@ fn setup(fixed_density: bool) -> impl Strategy<Value = Setup> {
         0u32..4,
         prop_oneof![Just(1u32), Just(4), Just(7), Just(16)],
         fill,
+        prop_oneof![Just(FirstPacker::HoleFilling), Just(FirstPacker::Horizons)],
     )
         .prop_map(
-            |(width_texels, height_texels, padding_texels, rotations, fill)| Setup {
+            |(width_texels, height_texels, padding_texels, rotations, fill, first_packer)| Setup {
                 width_texels,
                 height_texels,
                 padding_texels,
                 rotations,
                 fill,
+                first_packer,
             },
         )
 }
@@ -404,6 +407,7 @@ fn options(charts: &[Chart], s: &Setup) -> PackOptions {
         padding_texels: s.padding_texels,
         density,
         rotations: s.rotations,
+        first_packer: s.first_packer,
     }
 }
 
@@ -715,6 +719,7 @@ fn several_pages_keep_the_contract() {
         padding_texels: 2,
         rotations: 16,
         fill: Some(12.0 * charts[0].area_m2 * 30.0 * 30.0 / (128.0 * 128.0)),
+        first_packer: FirstPacker::default(),
     };
     let packing = pack_and_check(&specs, &setup).unwrap_or_else(|e| panic!("{e}"));
     assert!(packing.num_pages >= 2, "{} pages", packing.num_pages);
@@ -785,6 +790,7 @@ fn tiny_charts_keep_the_full_padding() {
         padding_texels: 2,
         rotations: 7,
         fill: Some(0.5861242239747215),
+        first_packer: FirstPacker::default(),
     };
     let charts: Vec<Chart> = specs.iter().map(build).collect();
     let borrowed: Vec<PackChart<'_>> = charts.iter().map(Chart::borrow).collect();
@@ -821,6 +827,7 @@ fn the_checker_catches_each_violation() {
         padding_texels: 2,
         density: TexelDensity::TexelsPerUnit(10.0),
         rotations: 4,
+        first_packer: FirstPacker::default(),
     };
     let clean = pack_charts(
         &borrowed,

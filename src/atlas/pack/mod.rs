@@ -3,13 +3,17 @@
 //! Purpose: the third stage of the atlas pipeline. [`pack_charts`] scales every chart to one
 //! texel density, turns it (a nearly rectangular chart, [`place::RECTANGULAR_FILL`], to its
 //! minimum-area enclosing rectangle, axis-aligned, trying only its quarter turns; any other
-//! chart to its diameter, trying the angles of [`chart_rotations`]), and places it with the horizon ("Tetris") packer of lscm-2002 §4,
-//! extended as isocharts-2004 §6 (insertion from four directions, 16 rotations), then writes
-//! normalized page UVs. Where the horizons leave much of the page empty (fit-to-page
-//! efficiency below [`HOLE_FILL_BELOW`] with many charts, [`HOLE_FILL_BELOW_FEW_CHARTS`] with
-//! few, or a fixed density needing more than one page), the
-//! charts are packed again with *hole filling* ([`hole`], an extension of the papers) and the
-//! better packing is kept: in the order of `padded_box_order` (largest padded UV box first),
+//! chart to its diameter, trying the angles of [`chart_rotations`]), and places it with two
+//! packers, keeping the denser packing. The horizon ("Tetris") packer of lscm-2002 §4,
+//! extended as isocharts-2004 §6 (insertion from four directions, 16 rotations), and *hole
+//! filling* ([`hole`], an extension of the papers). A fit-to-page packing searches its
+//! density with the packer of [`PackOptions::first_packer`] first, then with the other only
+//! above the density found ([`FirstPacker::Horizons`] runs hole filling only where the
+//! horizons leave much of the page empty: efficiency below [`HOLE_FILL_BELOW`] with many
+//! charts, [`HOLE_FILL_BELOW_FEW_CHARTS`] with few); a fixed density packs with the horizons,
+//! and again with hole filling when it needs more than one page. Then it writes normalized
+//! page UVs. Hole filling places the charts in the order of `padded_box_order` (largest
+//! padded UV box first):
 //! each chart goes to a position of the page where its padded footprint meets no placed
 //! footprint (exact occupancy of every placed chart, an exhaustive bit-parallel search), near
 //! the top and touching placed charts most (the contact score of [`hole`], with the angles of
@@ -68,14 +72,19 @@ use std::ops::ControlFlow;
 use super::progress::StageProgress;
 
 mod cache;
+mod fit;
 mod hull;
 pub mod outline;
 pub mod placement;
 mod types;
 
 pub use cache::PackCache;
+use fit::{fit_to_page, FitStart};
+pub use fit::{FIT_GUESS_GROWTH, FIT_START_FILL};
 pub use one_page::pack_one_page;
-pub use types::{PackChart, PackError, PackOptions, Packing, PlacedChart, TexelDensity};
+pub use types::{
+    FirstPacker, PackChart, PackError, PackOptions, Packing, PlacedChart, TexelDensity,
+};
 
 /// Largest page side accepted, texels (`width_texels`, `height_texels`): bounds the memory of
 /// the horizons (O(side)) and of a footprint (at most one page of bits).
@@ -194,10 +203,11 @@ pub const FIT_PROBE_STEP: f64 = 0.01;
 /// only), [`PackError::Cancelled`].
 ///
 /// Cost: one packing per density trial (one with a fixed density, at most
-/// [`MAX_FIT_TRIALS`] + [`FIT_PROBES`] + 1 with fit-to-page, typically 8–11); a packing rasterizes
-/// `⌈rotations / 4⌉` footprints per chart (or `rotations` when not a multiple of 4) and runs
-/// the horizon search of [`horizon`] for every orientation (the first-fit search of [`hole`]
-/// instead when the packing is repeated with hole filling: at most twice the packings).
+/// [`MAX_FIT_TRIALS`] + [`FIT_PROBES`] + 1 per fit-to-page search, typically 6–11; the second
+/// packer's search stops at its first trial when it cannot beat the first's density); a
+/// packing rasterizes `⌈rotations / 4⌉` footprints per chart (or `rotations` when not a
+/// multiple of 4) and runs the horizon search of [`horizon`] or the search of [`hole`] for
+/// every orientation.
 pub fn pack_charts(
     charts: &[PackChart<'_>],
     options: &PackOptions,
@@ -208,7 +218,8 @@ pub fn pack_charts(
 
 /// [`pack_charts`], with the fit-to-page density search starting at `start_texels_per_unit`
 /// (a density the caller expects to fit, such as one a similar packing reached) instead of
-/// where the charts would cover 60% of the page: fewer trials when the guess is close. Same
+/// where the charts would cover [`FIT_START_FILL`] of the page: fewer trials when the guess is
+/// close. Same
 /// contract and guarantees; the density found may differ from [`pack_charts`]'s within the
 /// search's tolerance. Ignored with [`TexelDensity::TexelsPerUnit`] or when not finite and
 /// positive.
@@ -270,6 +281,37 @@ fn pack_charts_with(
             TexelDensity::FitToPage => fit_to_page(ctx, start, monitor),
         }
     };
+    if options.first_packer == FirstPacker::HoleFilling
+        && options.density == TexelDensity::FitToPage
+        && order.len() < HOLE_SCORED_MIN_CHARTS
+    {
+        // Hole filling first, started at the fill density as a guess (its first step up is
+        // small): the search hole filling ran when it followed the horizons, from where it
+        // started whenever they left the page sparse, so it finds the same packing there; then
+        // the horizons, kept only when they pack denser.
+        let total_area_m2: f64 = order.iter().map(|&i| prepared[i].area_m2).sum();
+        let hole_order = padded_box_order(charts, &prepared, &order, options, total_area_m2);
+        ctx.holes = true;
+        ctx.scored = order.len() >= HOLE_SCORED_MIN_CHARTS;
+        ctx.order = &hole_order;
+        let start = match start {
+            FitStart::Fill => FitStart::FillAsGuess,
+            given => given,
+        };
+        let holes = fit_to_page(&ctx, start, monitor)?;
+        ctx.holes = false;
+        ctx.scored = false;
+        ctx.order = &order;
+        // The stage's progress stays at its end; the monitor can still cancel.
+        let mut at_end = |_: (usize, usize)| monitor((1, 1));
+        let trial = match fit_to_page(&ctx, FitStart::Beat(holes.texels_per_unit), &mut at_end) {
+            Ok(t) if t.texels_per_unit > holes.texels_per_unit => t,
+            Err(PackError::Cancelled) => return Err(PackError::Cancelled),
+            // Not denser, or nothing above hole filling's density fits.
+            _ => holes,
+        };
+        return Ok(ctx.output(&trial));
+    }
     let mut trial = pack(&ctx, start, monitor)?;
     // Hole filling ([`hole`]) where the horizons leave much of the page empty: fit-to-page
     // below `HOLE_FILL_BELOW` (`HOLE_FILL_BELOW_FEW_CHARTS` with few charts), or a fixed
@@ -393,8 +435,8 @@ fn padded_box_order(
 /// Fill ratio of the density of `padded_box_order`.
 pub const HOLE_ORDER_FILL: f64 = 0.55;
 
-/// Fit-to-page packings of at least [`HOLE_SCORED_MIN_CHARTS`] charts that the horizons alone
-/// pack below this efficiency (placed UV area / page area) are packed again with hole filling
+/// Fit-to-page packings with [`FirstPacker::Horizons`] of at least [`HOLE_SCORED_MIN_CHARTS`]
+/// charts that the horizons alone pack below this efficiency (placed UV area / page area) are packed again with hole filling
 /// ([`hole`]), keeping the better: issue 21's target for every mesh. Fewer charts are packed
 /// again only below [`HOLE_FILL_BELOW_FEW_CHARTS`]. Trade-off: where hole filling cannot beat
 /// the horizons its search stops after one trial (just above their density), where it can it
@@ -738,215 +780,6 @@ fn unit(v: f64) -> f64 {
         0.0
     } else {
         v.clamp(0.0, 1.0)
-    }
-}
-
-/// The largest density (within [`FIT_TOLERANCE`]) at which one page holds every chart: a
-/// search on log density: steps from the last trial's fill ratio until a density that fits and
-/// one that does not are known, then bisection; then the [`FIT_PROBES`] densities above the
-/// bracket, upwards until one does not fit ([`FitSearch`]). A failing trial stops at its first
-/// chart that does not fit (with hole filling, after [`HOLE_SKIPS_MAX`]), so it costs at most
-/// a full one. Deterministic; at most
-/// [`MAX_FIT_TRIALS`] + [`FIT_PROBES`] trials (+1 last-resort trial at a density where every
-/// chart is below a texel). The trials run one after another, each using every thread
-/// (footprints, horizon sides, hole-search orientations).
-fn fit_to_page(
-    ctx: &Context<'_, '_>,
-    start: FitStart,
-    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
-) -> Result<Trial, PackError> {
-    let [w, h] = ctx.page();
-    let page_area = f64::from(w) * f64::from(h);
-    let mut progress = Steps::new(monitor, ctx.order.len() * (MAX_FIT_TRIALS + FIT_PROBES + 1));
-    let total_area: f64 = ctx.order.iter().map(|&i| ctx.prepared[i].area_m2).sum();
-    let does_not_fit = || PackError::DoesNotFit {
-        charts: ctx.order.len(),
-        page_texels: [w, h],
-        padding_texels: ctx.options.padding_texels,
-    };
-    if total_area.is_nan() || total_area <= 0.0 {
-        // Only degenerate charts: one texel each, any density.
-        let t = ctx.run(1.0, false, &mut progress)?;
-        progress.finish()?;
-        return if t.unplaced == 0 {
-            Ok(t)
-        } else {
-            Err(does_not_fit())
-        };
-    }
-    let clamp_d = |d: f64| d.clamp(1e-300, 1e300);
-    // How much the packing would have to shrink (> 1) or could grow (< 1).
-    let ratio_of = |t: &Trial| {
-        if t.unplaced == 0 {
-            let [x0, y0, x1, y1] = t.pages[0].bbox().unwrap_or([0, 0, 1, 1]);
-            (f64::from(x1 - x0) / f64::from(w)).max(f64::from(y1 - y0) / f64::from(h))
-        } else {
-            let placed = (total_area - t.unplaced_area_m2).max(total_area * 1e-6);
-            (total_area / placed)
-                .sqrt()
-                .max(t.worst_size_ratio)
-                .max(1.0 + FIT_TOLERANCE)
-        }
-    };
-    let fill = (0.6 * page_area / total_area).sqrt();
-    let (d, beat, guessed) = match start {
-        FitStart::Fill => (fill, None, false),
-        FitStart::Guess(d) => (d, None, true),
-        FitStart::Beat(b) => {
-            let above = clamp_d(b * (1.0 + FIT_TOLERANCE));
-            (above.max(fill), Some(above), true)
-        }
-    };
-    let mut d = clamp_d(d);
-    let mut search = FitSearch {
-        probes: if ctx.holes { 0 } else { FIT_PROBES },
-        tolerance: if ctx.holes {
-            HOLE_FIT_TOLERANCE
-        } else {
-            FIT_TOLERANCE
-        },
-        guessed,
-        floor: beat,
-        ..FitSearch::default()
-    };
-    let mut fit: Option<Trial> = None;
-    loop {
-        let t = ctx.run(d, false, &mut progress)?;
-        let fitted = t.unplaced == 0;
-        if !fitted && beat.is_some_and(|b| d <= b) {
-            // Nothing above the density to beat fits where it was tried.
-            break;
-        }
-        let next = search.next(d, fitted, ratio_of(&t)).map(clamp_d);
-        if fitted && fit.as_ref().is_none_or(|f| d > f.texels_per_unit) {
-            fit = Some(t);
-        }
-        let Some(n) = next else { break };
-        d = n;
-    }
-    let t = match fit {
-        Some(t) => t,
-        None if beat.is_some() => return Err(does_not_fit()),
-        None => {
-            // Last resort: a density at which every chart is below a texel.
-            let extent = ctx
-                .order
-                .iter()
-                .map(|&i| ctx.prepared[i].unit_scale * uv_extent(&ctx.charts[i]))
-                .fold(0.0, f64::max);
-            let tiny = if extent > 0.0 {
-                clamp_d(0.25 / extent)
-            } else {
-                1.0
-            };
-            let t = ctx.run(tiny, false, &mut progress)?;
-            if t.unplaced > 0 {
-                return Err(does_not_fit());
-            }
-            t
-        }
-    };
-    progress.finish()?;
-    Ok(t)
-}
-
-/// The density search of [`fit_to_page`] as a state machine: which density to pack next,
-/// given the last one and its outcome.
-#[derive(Debug, Clone, Default)]
-struct FitSearch {
-    /// Largest density known to fit, smallest known not to fit (search phase).
-    lo: Option<f64>,
-    hi: Option<f64>,
-    /// Search trials run so far.
-    steps: usize,
-    /// Probes to run after the search ([`FIT_PROBES`], 0 when filling holes), and the probe
-    /// running (`k ≥ 1`: density `base · (1 + k · FIT_PROBE_STEP)`), with its base `lo`.
-    probes: usize,
-    probe: usize,
-    probe_base: f64,
-    /// The bracket closes at this ratio: [`FIT_TOLERANCE`], or [`HOLE_FIT_TOLERANCE`] when
-    /// filling holes.
-    tolerance: f64,
-    /// The search started at a caller's density ([`FitStart::Guess`], [`FitStart::Beat`]),
-    /// expected to be close: its first growth is [`FIT_GUESS_GROWTH`], not 5%.
-    guessed: bool,
-    /// Trials that fitted before the first that did not (each grows the next step).
-    fits_in_a_row: usize,
-    /// [`FitStart::Beat`]'s density just above the one to beat: no step goes below it while
-    /// nothing has fitted (the caller stops when it fails).
-    floor: Option<f64>,
-}
-
-/// Where [`fit_to_page`] starts its search.
-#[derive(Debug, Clone, Copy)]
-enum FitStart {
-    /// Where the charts would cover 60% of the page.
-    Fill,
-    /// A density the caller expects to fit.
-    Guess(f64),
-    /// Only a density above this one is wanted (another packing reached it): the search starts
-    /// where [`FitStart::Fill`] does, or [`FIT_TOLERANCE`] above this density when that is
-    /// higher; until a trial fits, the steps down stop at that density, and a failure there
-    /// ends the search.
-    Beat(f64),
-}
-
-/// The first growth of a search that started at a caller's density (expected close to the
-/// largest that fits): a bracket of 1% closes in two bisections, where the usual 5% takes
-/// four. Trade-off: when the guess is far below, one more trial is spent before the 5% steps.
-pub const FIT_GUESS_GROWTH: f64 = 1.01;
-
-impl FitSearch {
-    /// Records that density `d` fitted or not (`ratio`: how much the packing would have to
-    /// shrink, > 1, or could grow, < 1) and returns the density to pack next, or `None` when
-    /// the search is over.
-    fn next(&mut self, d: f64, fitted: bool, ratio: f64) -> Option<f64> {
-        let probe_density = |s: &Self| s.probe_base * (1.0 + FIT_PROBE_STEP * s.probe as f64);
-        if self.probe > 0 {
-            // Probes go upwards while they fit.
-            if !fitted || self.probe >= self.probes {
-                return None;
-            }
-            self.probe += 1;
-            return Some(probe_density(self));
-        }
-        self.steps += 1;
-        if fitted {
-            if self.lo.is_none_or(|l| d > l) {
-                self.lo = Some(d);
-            }
-        } else if self.hi.is_none_or(|n| d < n) {
-            self.hi = Some(d);
-        }
-        let closed =
-            matches!((self.lo, self.hi), (Some(l), Some(n)) if n <= l * (1.0 + self.tolerance));
-        if closed || self.steps >= MAX_FIT_TRIALS {
-            let lo = self.lo?;
-            if self.probes == 0 {
-                return None;
-            }
-            self.probe = 1;
-            self.probe_base = lo;
-            return Some(probe_density(self));
-        }
-        // Once bracketed, bisect (log scale); before, step by the fill ratio (a packing's size
-        // is about linear in density), growing by at least 5%, 10%, 20%, 40% while it fits.
-        Some(match (self.lo, self.hi) {
-            (Some(l), Some(n)) => (l * n).sqrt(),
-            _ if fitted => {
-                // Consecutive fits grow by 5%, 10%, 20%, 40% (a caller's guess by 1% first).
-                self.fits_in_a_row += 1;
-                let growth = if self.guessed && self.steps == 1 {
-                    FIT_GUESS_GROWTH
-                } else {
-                    let k = self.fits_in_a_row - usize::from(self.guessed);
-                    1.0 + 0.05 * f64::from(1u32 << k.clamp(1, 4).saturating_sub(1))
-                };
-                d / ratio.min(1.0 / growth)
-            }
-            (None, _) if self.floor.is_some() => (d / ratio).max(self.floor?),
-            _ => d / ratio,
-        })
     }
 }
 

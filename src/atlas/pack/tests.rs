@@ -2,6 +2,7 @@
 //! [`super::test_charts`] (centre sampling, the evaluator's definitions).
 use std::ops::ControlFlow;
 
+use super::fit::fill_density;
 use super::test_charts::{
     as_pack_charts, check_packing, disc, l_shape, mixed_set, realistic_set, strip, triangle,
     OwnedChart, PackCheck,
@@ -791,4 +792,109 @@ fn a_dumbbell_is_cut_across_its_bar() {
         area_m2: 1.0,
     };
     assert!(place::neck_cut(&flat.as_pack_chart()).is_none());
+}
+
+#[test]
+fn hole_filling_first_keeps_the_denser_search_and_skips_the_horizons_where_they_lose() {
+    // `FirstPacker::HoleFilling` (fewer than HOLE_SCORED_MIN_CHARTS charts) keeps the denser
+    // of hole filling's own density search and the horizons' search above it: never below hole
+    // filling alone. Where the horizons leave the page sparse, hole filling is the search that
+    // followed them (but for their density as a floor), so the packing is as dense as the
+    // horizons-first one within the search's tolerance, in fewer trials (the horizons' full
+    // search is not run).
+    let quiet = || |_: (usize, usize)| ControlFlow::Continue(());
+    let mut sparse_sets = 0;
+    for (what, charts) in [
+        ("mixed 12", mixed_set(12, 9)),
+        ("mixed 20", mixed_set(20, 4)),
+        ("mixed 32", mixed_set(32, 3)),
+        ("realistic 18", realistic_set(3)),
+        ("realistic 30", realistic_set(5)),
+        (
+            "bent strips",
+            (0..10)
+                .map(|k| strip(4.0 + 0.5 * f64::from(k), 0.6, 16, 1.5 + 0.3 * f64::from(k)))
+                .collect(),
+        ),
+        (
+            "l shapes",
+            (0..12)
+                .map(|k| l_shape(3.0 + 0.3 * f64::from(k), 0.8))
+                .collect(),
+        ),
+    ] {
+        assert!(charts.len() < HOLE_SCORED_MIN_CHARTS);
+        let borrowed = as_pack_charts(&charts);
+        let holes_first = PackOptions::default();
+        assert_eq!(holes_first.first_packer, FirstPacker::HoleFilling);
+        let horizons_first = PackOptions {
+            first_packer: FirstPacker::Horizons,
+            ..holes_first
+        };
+        let packing = pack_charts(&borrowed, &holes_first, &mut go()).unwrap();
+        assert_guarantees(&check_packing(&borrowed, &packing, &holes_first), what);
+        // Hole filling's search alone, as `pack_charts` starts it.
+        let prepared: Vec<place::PreparedChart> = borrowed
+            .iter()
+            .enumerate()
+            .map(|(i, c)| place::prepare_chart(i, c).unwrap())
+            .collect();
+        let order = largest_first(&prepared);
+        let total: f64 = order.iter().map(|&i| prepared[i].area_m2).sum();
+        let hole_order = padded_box_order(&borrowed, &prepared, &order, &holes_first, total);
+        let ctx = Context {
+            holes: true,
+            scored: order.len() >= HOLE_SCORED_MIN_CHARTS,
+            ..Context::new(&borrowed, &prepared, &hole_order, &holes_first)
+        };
+        let alone = fit_to_page(&ctx, FitStart::FillAsGuess, &mut quiet()).unwrap();
+        assert!(
+            packing.texels_per_unit >= alone.texels_per_unit,
+            "{what}: {} below hole filling's own {}",
+            packing.texels_per_unit,
+            alone.texels_per_unit
+        );
+        // The horizons' own search: where it is sparse, horizons first runs hole filling after
+        // it, from the same start when the fill density is above the horizons'.
+        let horizons = fit_to_page(
+            &Context::new(&borrowed, &prepared, &order, &horizons_first),
+            FitStart::Fill,
+            &mut quiet(),
+        )
+        .unwrap();
+        let fill = fill_density(total, ctx.page());
+        if horizons.texels_per_unit * (1.0 + FIT_TOLERANCE) < fill {
+            sparse_sets += 1;
+            let before = pack_charts(&borrowed, &horizons_first, &mut go()).unwrap();
+            // The same hole-filling search, except below the horizons' density, where
+            // horizons first stops it (its floor): within the search's tolerance.
+            assert!(
+                packing.texels_per_unit >= before.texels_per_unit * (1.0 - HOLE_FIT_TOLERANCE),
+                "{what}: {} below horizons first's {}",
+                packing.texels_per_unit,
+                before.texels_per_unit
+            );
+            assert!(
+                packing.trials < before.trials,
+                "{what}: {} trials, horizons first {}",
+                packing.trials,
+                before.trials
+            );
+        }
+    }
+    assert!(
+        sparse_sets > 0,
+        "no set where the horizons leave the page sparse"
+    );
+    // More charts take the contact-scored search: they search with the horizons first.
+    let charts = mixed_set(60, 3);
+    let borrowed = as_pack_charts(&charts);
+    let horizons_first = PackOptions {
+        first_packer: FirstPacker::Horizons,
+        ..PackOptions::default()
+    };
+    assert_eq!(
+        pack_charts(&borrowed, &PackOptions::default(), &mut go()).unwrap(),
+        pack_charts(&borrowed, &horizons_first, &mut go()).unwrap()
+    );
 }
