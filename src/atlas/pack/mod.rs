@@ -7,8 +7,9 @@
 //! packers, keeping the denser packing. The horizon ("Tetris") packer of lscm-2002 §4,
 //! extended as isocharts-2004 §6 (insertion from four directions, 16 rotations), and *hole
 //! filling* ([`hole`], an extension of the papers). A fit-to-page packing searches its
-//! density with the packer of [`PackOptions::first_packer`] first, then with the other only
-//! above the density found ([`FirstPacker::Horizons`] runs hole filling only where the
+//! density with the packer of [`PackOptions::first_packer`] first (hole filling first only
+//! below [`HOLE_SCORED_MIN_CHARTS`] charts), then with the other only above the density found
+//! ([`FirstPacker::Horizons`] runs hole filling only where the
 //! horizons leave much of the page empty: efficiency below [`HOLE_FILL_BELOW`] with many
 //! charts, [`HOLE_FILL_BELOW_FEW_CHARTS`] with few); a fixed density packs with the horizons,
 //! and again with hole filling when it needs more than one page. Then it writes normalized
@@ -219,8 +220,7 @@ pub fn pack_charts(
 /// [`pack_charts`], with the fit-to-page density search starting at `start_texels_per_unit`
 /// (a density the caller expects to fit, such as one a similar packing reached) instead of
 /// where the charts would cover [`FIT_START_FILL`] of the page: fewer trials when the guess is
-/// close. Same
-/// contract and guarantees; the density found may differ from [`pack_charts`]'s within the
+/// close. Same contract and guarantees; the density found may differ from [`pack_charts`]'s within the
 /// search's tolerance. Ignored with [`TexelDensity::TexelsPerUnit`] or when not finite and
 /// positive.
 pub fn pack_charts_from(
@@ -285,14 +285,14 @@ fn pack_charts_with(
         && options.density == TexelDensity::FitToPage
         && order.len() < HOLE_SCORED_MIN_CHARTS
     {
-        // Hole filling first, started at the fill density as a guess (its first step up is
-        // small): the search hole filling ran when it followed the horizons, from where it
-        // started whenever they left the page sparse, so it finds the same packing there; then
-        // the horizons, kept only when they pack denser.
+        // Hole filling first (the plain first fit: fewer than HOLE_SCORED_MIN_CHARTS charts),
+        // started at the fill density as a guess (its first step up is small): the search hole
+        // filling ran when it followed the horizons and they left the page sparse, but for
+        // their density as its floor. Then the horizons, kept only when they pack denser.
         let total_area_m2: f64 = order.iter().map(|&i| prepared[i].area_m2).sum();
         let hole_order = padded_box_order(charts, &prepared, &order, options, total_area_m2);
         ctx.holes = true;
-        ctx.scored = order.len() >= HOLE_SCORED_MIN_CHARTS;
+        ctx.scored = false;
         ctx.order = &hole_order;
         let start = match start {
             FitStart::Fill => FitStart::FillAsGuess,
@@ -435,9 +435,10 @@ fn padded_box_order(
 /// Fill ratio of the density of `padded_box_order`.
 pub const HOLE_ORDER_FILL: f64 = 0.55;
 
-/// Fit-to-page packings with [`FirstPacker::Horizons`] of at least [`HOLE_SCORED_MIN_CHARTS`]
-/// charts that the horizons alone pack below this efficiency (placed UV area / page area) are packed again with hole filling
-/// ([`hole`]), keeping the better: issue 21's target for every mesh. Fewer charts are packed
+/// Fit-to-page packings with the horizons first (see [`FirstPacker`]) of at least
+/// [`HOLE_SCORED_MIN_CHARTS`] charts that the horizons alone pack below this efficiency
+/// (placed UV area / page area) are packed again with hole filling ([`hole`]), keeping the
+/// better: issue 21's target for every mesh. Fewer charts are packed
 /// again only below [`HOLE_FILL_BELOW_FEW_CHARTS`]. Trade-off: where hole filling cannot beat
 /// the horizons its search stops after one trial (just above their density), where it can it
 /// costs up to twice the pack stage. Measured against 0.60: beast_sub2_1M (248 charts) 0.656 →
