@@ -15,6 +15,19 @@ fn go() -> StageProgress<'static> {
     StageProgress::ignored(Stage::Pack)
 }
 
+/// Each chart prepared, the charts in `pack_charts`'s order (largest first) and their total
+/// 3-D area: what a test needs to run the density search or a trial of its own.
+fn prepared_in_order(charts: &[PackChart<'_>]) -> (Vec<place::PreparedChart>, Vec<usize>, f64) {
+    let prepared: Vec<place::PreparedChart> = charts
+        .iter()
+        .enumerate()
+        .map(|(i, c)| place::prepare_chart(i, c).unwrap())
+        .collect();
+    let order = largest_first(&prepared);
+    let total = order.iter().map(|&i| prepared[i].area_m2).sum();
+    (prepared, order, total)
+}
+
 fn pack(charts: &[OwnedChart], options: &PackOptions) -> (Packing, PackCheck) {
     let borrowed = as_pack_charts(charts);
     let packing = pack_charts(&borrowed, options, &mut go()).unwrap_or_else(|e| panic!("{e}"));
@@ -626,13 +639,7 @@ fn a_failing_hole_filling_trial_counts_only_the_charts_it_could_not_place() {
     let borrowed = as_pack_charts(&charts);
     let options = PackOptions::default();
     let fit = pack_charts(&borrowed, &options, &mut go()).unwrap();
-    let prepared: Vec<place::PreparedChart> = borrowed
-        .iter()
-        .enumerate()
-        .map(|(i, c)| place::prepare_chart(i, c).unwrap())
-        .collect();
-    let order = largest_first(&prepared);
-    let total: f64 = order.iter().map(|&i| prepared[i].area_m2).sum();
+    let (prepared, order, total) = prepared_in_order(&borrowed);
     let mut skipped_some = false;
     for holes in [true, false] {
         let ctx = Context {
@@ -833,18 +840,11 @@ fn hole_filling_first_keeps_the_denser_search_and_skips_the_horizons_where_they_
         };
         let packing = pack_charts(&borrowed, &holes_first, &mut go()).unwrap();
         assert_guarantees(&check_packing(&borrowed, &packing, &holes_first), what);
-        // Hole filling's search alone, as `pack_charts` starts it.
-        let prepared: Vec<place::PreparedChart> = borrowed
-            .iter()
-            .enumerate()
-            .map(|(i, c)| place::prepare_chart(i, c).unwrap())
-            .collect();
-        let order = largest_first(&prepared);
-        let total: f64 = order.iter().map(|&i| prepared[i].area_m2).sum();
+        // Hole filling's search alone, as `pack_charts` starts it (the plain first fit).
+        let (prepared, order, total) = prepared_in_order(&borrowed);
         let hole_order = padded_box_order(&borrowed, &prepared, &order, &holes_first, total);
         let ctx = Context {
             holes: true,
-            scored: order.len() >= HOLE_SCORED_MIN_CHARTS,
             ..Context::new(&borrowed, &prepared, &hole_order, &holes_first)
         };
         let alone = fit_to_page(&ctx, FitStart::FillAsGuess, &mut quiet()).unwrap();
