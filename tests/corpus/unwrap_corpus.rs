@@ -6,6 +6,9 @@
 //! `$TEXATLAS_GLTF_VALIDATOR` is set) 0 errors; and our report's L2, L∞, charts and packing
 //! must agree with the evaluator's within 1 %.
 //!
+//! The files of its `hard/` folder (game assets that broke wave 1: flips, self-overlap, mixed UV
+//! sets) are checked the same way, when it exists.
+//!
 //! Skipped (with a message) when `TEXATLAS_CORPUS_DIR` is unset. The 1M-triangle file is left out
 //! unless `TEXATLAS_CORPUS_ALL` is set (`texatlas bench` covers it).
 //! `TEXATLAS_CORPUS_ONLY=substr` restricts the run to matching names.
@@ -23,16 +26,27 @@ fn every_corpus_file_unwraps_and_passes_the_evaluator() {
     let out_dir =
         std::env::temp_dir().join(format!("texatlas-unwrap-corpus-{}", std::process::id()));
     std::fs::create_dir_all(&out_dir).expect("temp dir");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&corpus)
-        .expect("corpus readable")
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "glb"))
-        .filter(|p| {
-            std::env::var_os("TEXATLAS_CORPUS_ALL").is_some() || !p.to_string_lossy().contains("1M")
-        })
-        .collect();
-    files.sort();
+    let glbs_in = |dir: &Path| -> Vec<PathBuf> {
+        let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+            .unwrap_or_else(|e| panic!("{} is not readable: {e}", dir.display()))
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|e| e == "glb"))
+            .filter(|p| {
+                std::env::var_os("TEXATLAS_CORPUS_ALL").is_some()
+                    || !p.to_string_lossy().contains("1M")
+            })
+            .collect();
+        files.sort();
+        files
+    };
+    let mut files = glbs_in(&corpus);
     assert!(!files.is_empty(), "no .glb in {}", corpus.display());
+    let hard = corpus.join("hard");
+    if hard.is_dir() {
+        let hard_files = glbs_in(&hard);
+        assert!(!hard_files.is_empty(), "no .glb in {}", hard.display());
+        files.extend(hard_files);
+    }
     let only = std::env::var("TEXATLAS_CORPUS_ONLY").ok();
     let mut failures = Vec::new();
     println!(
