@@ -58,7 +58,9 @@ use pack_input::{pack_charts_of, pack_inputs, PackInputs};
 use packing_cuts::cut_for_packing;
 use parameterize::{parameterize_charts, ChartDefect};
 use segment::{segment_charts_with, SegmentMethod};
-use uv_guard::{guard_uvs, restore_slivers, sampled_fold_faces, sampled_folds, split_off_faces};
+use uv_guard::{
+    exact_folds, guard_uvs, restore_slivers, sampled_fold_faces, sampled_folds, split_off_faces,
+};
 
 /// Counters of one [`generate`] run.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -257,7 +259,8 @@ pub fn generate(
     let mut parameterized = parameterized;
     let mut packing_of_cut_step = packing_of_cut_step;
     let mut round = 0;
-    let (written, charts) = loop {
+    let (written, charts, exact_found) = loop {
+        let mut exact_found = None;
         let mut written = pack_and_write(
             mesh,
             &parameterized,
@@ -295,8 +298,20 @@ pub fn generate(
                 &face_chart,
             );
         }
+        if faults.is_empty() && round < GUARD_SPLIT_ROUNDS {
+            let (folds, exact) = exact_folds(
+                mesh,
+                &written.corner_uvs,
+                &written.face_page,
+                written.packing.num_pages,
+                &face_chart,
+            );
+            faults = folds;
+            // The UVs the report measures, when nothing is split off: it reuses the search.
+            exact_found = Some(exact);
+        }
         if faults.is_empty() || round == GUARD_SPLIT_ROUNDS {
-            break (written, parameterized.segmentation.charts);
+            break (written, parameterized.segmentation.charts, exact_found);
         }
         stats.uv_guard_splits += faults.len();
         parameterized = split_off_faces(mesh, &parameterized, &faults, options)?;
@@ -323,7 +338,7 @@ pub fn generate(
     // 4. Measure.
     progress.stage_started(Stage::Measure);
     check(progress.advance(Stage::Measure, 0, 1), Stage::Measure)?;
-    let report = measure_atlas(&MeasureInput {
+    let input = MeasureInput {
         mesh,
         corner_uvs: &corner_uvs,
         face_page: &face_page,
@@ -331,7 +346,11 @@ pub fn generate(
         width_texels: options.pack.width_texels,
         height_texels: options.pack.height_texels,
         padding_texels: options.pack.padding_texels,
-    });
+    };
+    let report = match exact_found {
+        Some(exact) => measure::measure_atlas_with_exact(&input, exact),
+        None => measure_atlas(&input),
+    };
     check(progress.advance(Stage::Measure, 1, 1), Stage::Measure)?;
     progress.stage_finished(Stage::Measure);
 

@@ -29,8 +29,9 @@
 //! 3. what is left is returned, for `generate` to split each such face off into a chart of its
 //!    own and pack again (a single-face chart is never flipped: its orientation is its own);
 //!    so are the faces that [`sampled_folds`] finds covering a texel centre of another face of
-//!    their chart by the report's own sampling (a sliver thinner than the raster's rounding):
-//!    alone, a face keeps the padding from every other chart;
+//!    their chart by the report's own sampling (a sliver thinner than the raster's rounding),
+//!    and then those that [`exact_folds`] finds crossing another face of their chart by the
+//!    report's exact test: alone, a face keeps the padding from every other chart;
 //! 4. slivers whose UV height the rounding set far from their 3-D height get their apex moved
 //!    back (`slivers.rs`, [`restore_slivers`]), and where that is not enough one base vertex
 //!    with it: the one step that moves a corner of a face that is not flipped or degenerate,
@@ -50,7 +51,7 @@
 //! Sander, Snyder, Gortler, Hoppe 2001, "Texture mapping progressive meshes" §4 (vertex moves
 //! that keep every face of the one-ring oriented); the evaluator's definitions
 //! (`measure/mod.rs`, "Degenerate", "Charts", "Flips").
-use super::measure::{orientation_check, OrientationCheck};
+use super::measure::{exact_overlaps, orientation_check, ExactOverlaps, OrientationCheck};
 use crate::mesh::{FaceId, TriangleMesh};
 
 mod slivers;
@@ -411,6 +412,58 @@ pub(super) fn sampled_folds(
     let pairs = super::measure::sampled_same_chart_pairs(
         corner_uvs, face_page, num_pages, size, face_chart,
     );
+    smaller_of_pairs(mesh, pairs)
+}
+
+/// Faces of one chart whose open UV triangles intersect by the report's exact test
+/// (`measure::exact_overlaps`) though they cover no common texel centre, for the caller
+/// to split off (step 3), as [`sampled_folds`]: a few faces that meet every such pair
+/// ([`cover_of_pairs`]: each split-off face is one more chart to pack), ascending. A chart's
+/// border that comes back on itself across a cut-out strip (craft_speederD: two border edges
+/// 3e-5 texels apart, a cut-out quad between them in 3-D) is valid in `f64` and crosses itself
+/// once rounded to `f32`: one face there crosses two.
+/// Also returns the exact overlap pairs found, for the report to reuse when these UVs are the
+/// final ones.
+pub(super) fn exact_folds(
+    mesh: &TriangleMesh,
+    corner_uvs: &[[[f32; 2]; 3]],
+    face_page: &[u32],
+    num_pages: u32,
+    face_chart: &[u32],
+) -> (Vec<FaceId>, ExactOverlaps) {
+    let exact = exact_overlaps(corner_uvs, face_page, num_pages);
+    let faces = cover_of_pairs(mesh, &exact.same_chart(face_chart));
+    (faces, exact)
+}
+
+/// Faces that meet every pair of `pairs`, chosen greedily: the face in the most pairs not met
+/// yet, ties to the smaller 3-D area, then the higher index; ascending. Deterministic.
+fn cover_of_pairs(mesh: &TriangleMesh, pairs: &[(u32, u32)]) -> Vec<FaceId> {
+    let mut left: Vec<(u32, u32)> = pairs.to_vec();
+    let mut chosen: Vec<FaceId> = Vec::new();
+    while !left.is_empty() {
+        let mut count: std::collections::BTreeMap<u32, usize> = Default::default();
+        for &(a, b) in &left {
+            *count.entry(a).or_default() += 1;
+            *count.entry(b).or_default() += 1;
+        }
+        let area = |f: u32| mesh.face_area_m2(FaceId(f));
+        let Some((&pick, _)) = count.iter().max_by(|(fa, na), (fb, nb)| {
+            na.cmp(nb)
+                .then(area(**fb).total_cmp(&area(**fa)))
+                .then(fa.cmp(fb))
+        }) else {
+            break;
+        };
+        chosen.push(FaceId(pick));
+        left.retain(|&(a, b)| a != pick && b != pick);
+    }
+    chosen.sort_unstable();
+    chosen
+}
+
+/// Of each pair, the face of smaller 3-D area (ties: the higher index), ascending.
+fn smaller_of_pairs(mesh: &TriangleMesh, pairs: Vec<(u32, u32)>) -> Vec<FaceId> {
     let mut faces: Vec<FaceId> = pairs
         .into_iter()
         .map(|(a, b)| {
@@ -511,5 +564,51 @@ mod tests {
         assert_eq!(folds([0.2, 0.2]), vec![FaceId(1)]);
         // Unfolded, on the other side of the shared edge: nothing.
         assert!(folds([0.45, 0.45]).is_empty());
+    }
+
+    #[test]
+    fn exact_folds_split_off_a_crossing_the_raster_misses_with_the_fewest_faces() {
+        // A chart's border coming back on itself by 1e-4 texel: no texel centre is covered
+        // twice, but the open triangles intersect.
+        let mesh = build(&MeshInput::single_group(
+            vec![
+                [0.0, 0.0, 0.0],
+                [4.0, 0.0, 0.0],
+                [0.0, 4.0, 0.0],
+                [-1.0, 5.0, 0.0],
+                [1.0, 5.0, 0.0],
+                [0.0, 6.0, 0.0],
+            ],
+            vec![[0, 1, 2], [2, 4, 5], [2, 5, 3]],
+        ));
+        // Face 0's top edge runs along v = 0.5 from u = 0.25 to 0.5; faces 1 and 2 lie above
+        // it, but their shared corner sits `eps` below it, inside face 0: both cross it by a
+        // band thinner than any texel row.
+        let eps = 1e-4 / 64.0;
+        let face0 = [[0.1f32, 0.1], [0.5, 0.5], [0.25, 0.5]];
+        let crossing = [0.3f32, 0.5 - eps];
+        let corner_uvs = [
+            face0,
+            [crossing, [0.5, 0.6], [0.25, 0.65]],
+            [crossing, [0.25, 0.65], [0.15, 0.6]],
+        ];
+        for t in &corner_uvs {
+            let (p, q, r) = (t[0], t[1], t[2]);
+            let area = (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]);
+            assert!(area > 0.0, "test premise: every face is counter-clockwise");
+        }
+        let (pages, chart) = (&[0, 0, 0], &[0, 0, 0]);
+        assert!(
+            sampled_folds(&mesh, &corner_uvs, pages, 1, [64, 64], chart).is_empty(),
+            "test premise: the raster sees no fold"
+        );
+        let (faces, exact) = exact_folds(&mesh, &corner_uvs, pages, 1, chart);
+        let pairs = exact.same_chart(chart);
+        assert_eq!(pairs, vec![(0, 1), (0, 2)]);
+        // One face meets both pairs: face 0, not the two smaller ones.
+        assert_eq!(faces, vec![FaceId(0)]);
+        // In two charts, the crossing is not a fold of a chart: nothing to split off.
+        let (faces, _) = exact_folds(&mesh, &corner_uvs, pages, 1, &[0, 1, 1]);
+        assert!(faces.is_empty());
     }
 }

@@ -478,6 +478,63 @@ pub(crate) fn sampled_same_chart_pairs(
         .same_chart_pairs
 }
 
+/// The report's exact overlap pairs (`overlap.exact`: Shewchuk's predicates on the `f32` UVs,
+/// at most [`EXACT_OVERLAP_PAIRS_MAX`]) of one set of written UVs, found before the atlas is
+/// measured ([`exact_overlaps`]): for the pipeline's last line of defence (`uv_guard.rs`),
+/// where a fold thinner than the raster's rounding covers no texel centre and only this test
+/// sees it, and then for [`measure_atlas_with_exact`] on the same UVs, which does not search
+/// again.
+pub(crate) struct ExactOverlaps {
+    pairs: overlap::ExactPairs,
+    /// What the pairs were found on (`corner_uvs.len()`, `num_pages`), checked when measuring.
+    shape: (usize, u32),
+}
+
+impl ExactOverlaps {
+    /// The pairs `(a, b)`, `a < b`, whose faces lie in one chart of `chart_of_face`, ascending.
+    pub(crate) fn same_chart(&self, chart_of_face: &[u32]) -> Vec<(u32, u32)> {
+        self.pairs.same_chart(chart_of_face)
+    }
+}
+
+/// Searches the exact overlap pairs of `corner_uvs` ([`ExactOverlaps`]). Pure and
+/// deterministic; the cost of the report's exact search.
+pub(crate) fn exact_overlaps(
+    corner_uvs: &[[[f32; 2]; 3]],
+    face_page: &[u32],
+    num_pages: u32,
+) -> ExactOverlaps {
+    ExactOverlaps {
+        pairs: overlap::exact_overlap_pairs(corner_uvs, face_page, num_pages),
+        shape: (corner_uvs.len(), num_pages),
+    }
+}
+
+/// [`measure_atlas`] with the exact overlap pairs already found on these very UVs
+/// ([`exact_overlaps`] of `input.corner_uvs`, `input.face_page`, `input.num_pages`): the same
+/// report, without searching them again. Debug builds search again and check they agree.
+pub(crate) fn measure_atlas_with_exact(
+    input: &MeasureInput<'_>,
+    exact: ExactOverlaps,
+) -> AtlasReport {
+    assert_eq!(
+        exact.shape,
+        (input.corner_uvs.len(), input.num_pages),
+        "exact overlap pairs of other UVs"
+    );
+    debug_assert!(
+        exact.pairs.same_pairs(&overlap::exact_overlap_pairs(
+            input.corner_uvs,
+            input.face_page,
+            input.num_pages
+        )),
+        "exact overlap pairs of other UVs"
+    );
+    let (mut report, chart_of_face) = measure_without_exact_overlaps(input);
+    report.overlap.exact = exact.pairs.classify(&chart_of_face);
+    report
+}
+
 /// Measures the atlas. Pure and deterministic. Panics on the precondition violations listed on
 /// [`MeasureInput`]. Cost: see the module doc.
 pub fn measure_atlas(input: &MeasureInput<'_>) -> AtlasReport {

@@ -125,6 +125,25 @@ pub(super) struct ExactPairs {
 }
 
 impl ExactPairs {
+    /// The same pairs, examples and truncation as `other`.
+    pub(super) fn same_pairs(&self, other: &ExactPairs) -> bool {
+        self.pairs == other.pairs
+            && self.examples == other.examples
+            && self.truncated == other.truncated
+    }
+
+    /// The pairs `(a, b)`, `a < b`, whose faces lie in one chart of `chart_of_face`, ascending.
+    pub(super) fn same_chart(&self, chart_of_face: &[u32]) -> Vec<(u32, u32)> {
+        let mut pairs: Vec<(u32, u32)> = self
+            .pairs
+            .iter()
+            .filter(|p| chart_of_face[p[0] as usize] == chart_of_face[p[1] as usize])
+            .map(|p| (p[0], p[1]))
+            .collect();
+        pairs.sort_unstable();
+        pairs
+    }
+
     /// The report: counts by same or different chart, examples sorted.
     pub(super) fn classify(self, chart_of_face: &[u32]) -> ExactOverlap {
         let pairs = self.pairs.len() as u64;
