@@ -9,8 +9,8 @@ use super::error::AtlasError;
 use super::options::AtlasOptions;
 use super::pack::place::{box_waste_m2, neck_cut};
 use super::pack::{
-    pack_charts_cached, pack_one_page, FirstPacker, PackCache, PackChart, PackOptions, Packing,
-    TexelDensity,
+    pack_charts_above, pack_charts_cached, pack_one_page, FirstPacker, PackCache, PackChart,
+    PackOptions, Packing, TexelDensity,
 };
 use super::pack_input::{pack_charts_of, pack_inputs};
 use super::parameterize;
@@ -96,8 +96,9 @@ pub(super) fn pack_options(mesh: &TriangleMesh, options: &AtlasOptions) -> PackO
 /// are packed, and the cut is kept when the estimated efficiency (Σ chart area × density²
 /// over the page area: the packer places each chart at exactly that UV area) rises by at least
 /// [`PACKING_CUT_MIN_GAIN`]: first one packing at the density of that gain
-/// ([`pack_one_page`]), then, when it fits, the full density search (the better of the two is
-/// kept: the search is not monotone). Otherwise the chart wasting the next most is tried, up
+/// ([`pack_one_page`]), then, when it fits, the density search above that density
+/// ([`pack_charts_above`]: each packer only looks for a denser packing, and the one-page packing
+/// stands when none finds one). Otherwise the chart wasting the next most is tried, up
 /// to [`PACKING_CUT_MAX_TRIES`] charts; when no single cut paid and there are at most
 /// [`PACKING_CUT_ALL_MAX_CHARTS`] charts, every chart is cut at once and validated again
 /// (then every piece again, up to [`PACKING_CUT_ALL_LEVELS`] levels), the last tries. Only
@@ -133,10 +134,11 @@ pub(super) fn cut_for_packing(
         (packed, total)
     };
     // The estimated efficiency of `v`'s packing, its number of packed charts, and the packing
-    // (None above PACKING_CUT_MAX_CHARTS charts, where no cut is tried). The density search
-    // starts at `start` when given.
+    // (None above PACKING_CUT_MAX_CHARTS charts, where no cut is tried). With `above`, a
+    // density known to fit, the search looks only above it (`pack_charts_above`), and the
+    // packing is `None` when it finds nothing there.
     let estimate = |v: &parameterize::ParameterizedCharts,
-                    start: Option<f64>|
+                    above: Option<f64>|
      -> Result<(f64, usize, Option<Packing>), AtlasError> {
         let inputs = pack_inputs(mesh, v)?;
         let (packed, total) = packed_of(&inputs);
@@ -145,23 +147,26 @@ pub(super) fn cut_for_packing(
             return Ok((1.0, n, None));
         }
         let input = pack_charts_of(v, &packed, &inputs.triangles, &inputs.area_m2);
-        let packing = pack_charts_cached(
-            &input,
-            &pack_options,
-            start,
-            &cache,
-            &mut StageProgress::ignored(Stage::Pack),
-        )?;
-        Ok((
-            total * packing.texels_per_unit.powi(2) / page,
-            n,
-            Some(packing),
-        ))
+        let progress = &mut StageProgress::ignored(Stage::Pack);
+        let packing = match above {
+            Some(d) => pack_charts_above(&input, &pack_options, d, &cache, progress)?,
+            None => Some(pack_charts_cached(
+                &input,
+                &pack_options,
+                None,
+                &cache,
+                progress,
+            )?),
+        };
+        let eff = packing
+            .as_ref()
+            .map_or(0.0, |p| total * p.texels_per_unit.powi(2) / page);
+        Ok((eff, n, packing))
     };
     // The density at which `v`'s charts would pack at efficiency `goal`, with the packing,
     // when one page holds them there (`pack_one_page`: the horizons, then the plain first-fit
     // hole filling, each stopping at the first chart that does not fit; a cheap test before
-    // the full search of `estimate`).
+    // the search of `estimate`).
     let fits_at = |v: &parameterize::ParameterizedCharts,
                    goal: f64|
      -> Result<Option<(f64, Packing)>, AtlasError> {
@@ -176,7 +181,7 @@ pub(super) fn cut_for_packing(
         Ok(pack_one_page(&input, &pack_options, density, Some(&cache))?.map(|p| (density, p)))
     };
     // A candidate's efficiency and packing when they beat `best` by `PACKING_CUT_MIN_GAIN`: the
-    // full search runs only when the candidate fits at the efficiency that would keep it.
+    // search above it runs only when the candidate fits at the efficiency that would keep it.
     let try_candidate = |v: &parameterize::ParameterizedCharts,
                          best: f64|
      -> Result<Option<(f64, Option<Packing>)>, AtlasError> {
@@ -184,12 +189,14 @@ pub(super) fn cut_for_packing(
         let Some((density, fixed)) = fits_at(v, goal)? else {
             return Ok(None);
         };
+        // The search, only above the density that fits: the packing at that density stands
+        // when it finds nothing denser.
         let (eff, _, packing) = estimate(v, Some(density))?;
-        // The search is not monotone: it can end below a density already shown to fit.
-        Ok(Some(if eff >= goal {
-            (eff, packing)
-        } else {
-            (goal, Some(fixed))
+        Ok(Some(match packing {
+            Some(p) if eff >= goal => (eff, Some(p)),
+            // Above PACKING_CUT_MAX_CHARTS charts: no packing, as for the first estimate.
+            None if eff >= goal => (eff, None),
+            _ => (goal, Some(fixed)),
         }))
     };
     let (mut best, n, mut best_packing) = estimate(&validated, None)?;

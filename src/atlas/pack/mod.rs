@@ -229,7 +229,11 @@ pub fn pack_charts_from(
     start_texels_per_unit: Option<f64>,
     progress: &mut StageProgress<'_>,
 ) -> Result<Packing, PackError> {
-    pack_charts_with(charts, options, start_texels_per_unit, None, progress)
+    let from = match start_texels_per_unit {
+        Some(d) if d.is_finite() && d > 0.0 => SearchFrom::Guess(d),
+        _ => SearchFrom::Fill,
+    };
+    pack_charts_with(charts, options, from, None, progress)
 }
 
 /// [`pack_charts_from`] through `cache` ([`PackCache`]): what the cache holds for these charts
@@ -241,26 +245,77 @@ pub fn pack_charts_cached(
     cache: &PackCache,
     progress: &mut StageProgress<'_>,
 ) -> Result<Packing, PackError> {
-    pack_charts_with(
-        charts,
-        options,
-        start_texels_per_unit,
-        Some(cache),
-        progress,
-    )
+    let from = match start_texels_per_unit {
+        Some(d) if d.is_finite() && d > 0.0 => SearchFrom::Guess(d),
+        _ => SearchFrom::Fill,
+    };
+    pack_charts_with(charts, options, from, Some(cache), progress)
+}
+
+/// A fit-to-page packing denser than `fits_texels_per_unit`, a density at which one page is
+/// known to hold the charts (the caller packed them there, e.g. with [`pack_one_page`]), through
+/// `cache`; `Ok(None)` when no packer finds one. The density search of each packer only looks
+/// above that density: it starts just above it, never steps below it, and gives up at its first
+/// trial that does not fit before one has (a search from a guess instead steps down and climbs
+/// back to densities the caller already has). Same contract and guarantees as
+/// [`pack_charts`] for the packing it returns. [`PackError::InvalidOption`] unless the density
+/// is [`TexelDensity::FitToPage`] and `fits_texels_per_unit` is finite and positive.
+pub fn pack_charts_above(
+    charts: &[PackChart<'_>],
+    options: &PackOptions,
+    fits_texels_per_unit: f64,
+    cache: &PackCache,
+    progress: &mut StageProgress<'_>,
+) -> Result<Option<Packing>, PackError> {
+    if options.density != TexelDensity::FitToPage {
+        return Err(PackError::InvalidOption {
+            option: "density",
+            detail: "a search above a known density needs fit-to-page packing".into(),
+        });
+    }
+    if !(fits_texels_per_unit.is_finite() && fits_texels_per_unit > 0.0) {
+        return Err(PackError::InvalidOption {
+            option: "fits_texels_per_unit",
+            detail: format!("{fits_texels_per_unit} is not a finite positive density"),
+        });
+    }
+    let from = SearchFrom::Above(fits_texels_per_unit);
+    match pack_charts_with(charts, options, from, Some(cache), progress) {
+        Ok(p) => Ok(Some(p)),
+        Err(PackError::DoesNotFit { .. }) => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
+/// Where the fit-to-page search of [`pack_charts_with`] starts.
+#[derive(Debug, Clone, Copy)]
+enum SearchFrom {
+    /// Where the charts would cover [`FIT_START_FILL`] of the page.
+    Fill,
+    /// A density the caller expects to fit ([`pack_charts_from`]).
+    Guess(f64),
+    /// Only densities above this one, known to fit ([`pack_charts_above`]).
+    Above(f64),
 }
 
 fn pack_charts_with(
     charts: &[PackChart<'_>],
     options: &PackOptions,
-    start_texels_per_unit: Option<f64>,
+    from: SearchFrom,
     cache: Option<&PackCache>,
     progress: &mut StageProgress<'_>,
 ) -> Result<Packing, PackError> {
     options.check()?;
-    let start = match start_texels_per_unit {
-        Some(d) if d.is_finite() && d > 0.0 => FitStart::Guess(d),
-        _ => FitStart::Fill,
+    let (start, above) = match from {
+        SearchFrom::Fill => (FitStart::Fill, None),
+        SearchFrom::Guess(d) => (FitStart::Guess(d), None),
+        SearchFrom::Above(d) => (FitStart::Beat(d), Some(d)),
+    };
+    // A packer's search that finds nothing above `above` is not an error while the other may.
+    let found = |r: Result<Trial, PackError>| match r {
+        Ok(t) => Ok(Some(t)),
+        Err(PackError::DoesNotFit { .. }) if above.is_some() => Ok(None),
+        Err(e) => Err(e),
     };
     let monitor = &mut |(done, total): (usize, usize)| progress.advance(done, total);
     let (prepared, ids) = prepare_all(charts, cache)?;
@@ -298,36 +353,47 @@ fn pack_charts_with(
             FitStart::Fill => FitStart::FillAsGuess,
             given => given,
         };
-        let holes = fit_to_page(&ctx, start, monitor)?;
+        let holes = found(fit_to_page(&ctx, start, monitor))?;
         ctx.holes = false;
         ctx.scored = false;
         ctx.order = &order;
         // The stage's progress stays at its end; the monitor can still cancel.
         let mut at_end = |_: (usize, usize)| monitor((1, 1));
-        let trial = match fit_to_page(&ctx, FitStart::Beat(holes.texels_per_unit), &mut at_end) {
-            Ok(t) if t.texels_per_unit > holes.texels_per_unit => t,
-            Err(PackError::Cancelled) => return Err(PackError::Cancelled),
-            // Not denser, or nothing above hole filling's density fits.
-            _ => holes,
+        // Hole filling's density, or the caller's when it found none above it (`found` gives
+        // `None` only then).
+        let floor = holes
+            .as_ref()
+            .map_or(above.unwrap_or(0.0), |h| h.texels_per_unit);
+        let trial = match (fit_to_page(&ctx, FitStart::Beat(floor), &mut at_end), holes) {
+            (Ok(t), Some(h)) if t.texels_per_unit <= h.texels_per_unit => h,
+            (Ok(t), _) => t,
+            (Err(PackError::Cancelled), _) => return Err(PackError::Cancelled),
+            // Nothing above hole filling's density fits.
+            (Err(_), Some(h)) => h,
+            (Err(e), None) => return Err(e),
         };
         return Ok(ctx.output(&trial));
     }
-    let mut trial = pack(&ctx, start, monitor)?;
+    let mut trial = found(pack(&ctx, start, monitor))?;
     // Hole filling ([`hole`]) where the horizons leave much of the page empty: fit-to-page
     // below `HOLE_FILL_BELOW` (`HOLE_FILL_BELOW_FEW_CHARTS` with few charts), or a fixed
     // density that needs more than one page. The better
     // packing is kept (higher density, or fewer pages; ties: the horizons').
     let total_area_m2: f64 = order.iter().map(|&i| prepared[i].area_m2).sum();
     let [w, h] = ctx.page();
-    let efficiency = |t: &Trial| {
-        total_area_m2 * t.texels_per_unit * t.texels_per_unit / (f64::from(w) * f64::from(h))
-    };
-    let sparse = match options.density {
-        TexelDensity::FitToPage if order.len() >= HOLE_SCORED_MIN_CHARTS => {
-            efficiency(&trial) < HOLE_FILL_BELOW
+    let efficiency = |d: f64| total_area_m2 * d * d / (f64::from(w) * f64::from(h));
+    // The density to beat: the first packer's, or the caller's when it found none above it
+    // (then hole filling is the only packer left to try).
+    let floor = trial.as_ref().map(|t| t.texels_per_unit).or(above);
+    let sparse = match (options.density, &trial) {
+        (TexelDensity::FitToPage, Some(t)) if order.len() >= HOLE_SCORED_MIN_CHARTS => {
+            efficiency(t.texels_per_unit) < HOLE_FILL_BELOW
         }
-        TexelDensity::FitToPage => efficiency(&trial) < HOLE_FILL_BELOW_FEW_CHARTS,
-        TexelDensity::TexelsPerUnit(_) => trial.pages.len() > 1,
+        (TexelDensity::FitToPage, Some(t)) => {
+            efficiency(t.texels_per_unit) < HOLE_FILL_BELOW_FEW_CHARTS
+        }
+        (TexelDensity::FitToPage, None) => true,
+        (TexelDensity::TexelsPerUnit(_), t) => t.as_ref().is_some_and(|t| t.pages.len() > 1),
     };
     let hole_order;
     if sparse {
@@ -339,14 +405,15 @@ fn pack_charts_with(
         let mut at_end = |_: (usize, usize)| monitor((1, 1));
         // Hole filling is kept only when it packs denser than the horizons: its search starts
         // just above their density and gives up when that does not fit.
-        match pack(&ctx, FitStart::Beat(trial.texels_per_unit), &mut at_end) {
+        match pack(&ctx, FitStart::Beat(floor.unwrap_or(0.0)), &mut at_end) {
             Ok(t) => {
-                let better = match options.density {
-                    TexelDensity::FitToPage => t.texels_per_unit > trial.texels_per_unit,
-                    TexelDensity::TexelsPerUnit(_) => t.pages.len() < trial.pages.len(),
+                let better = match (options.density, &trial) {
+                    (_, None) => true,
+                    (TexelDensity::FitToPage, Some(h)) => t.texels_per_unit > h.texels_per_unit,
+                    (TexelDensity::TexelsPerUnit(_), Some(h)) => t.pages.len() < h.pages.len(),
                 };
                 if better {
-                    trial = t;
+                    trial = Some(t);
                 }
             }
             Err(PackError::Cancelled) => return Err(PackError::Cancelled),
@@ -355,7 +422,14 @@ fn pack_charts_with(
             Err(_) => {}
         }
     }
-    Ok(ctx.output(&trial))
+    match trial {
+        Some(t) => Ok(ctx.output(&t)),
+        None => Err(PackError::DoesNotFit {
+            charts: order.len(),
+            page_texels: [w, h],
+            padding_texels: options.padding_texels,
+        }),
+    }
 }
 
 /// Each chart's density-independent data ([`place::prepare_chart`]), computed in parallel,

@@ -898,3 +898,69 @@ fn hole_filling_first_keeps_the_denser_search_and_skips_the_horizons_where_they_
         pack_charts(&borrowed, &horizons_first, &mut go()).unwrap()
     );
 }
+
+#[test]
+fn a_search_above_a_density_that_fits_packs_denser_or_gives_up() {
+    let sets = [
+        ("12 mixed charts", mixed_set(12, 3), FirstPacker::Horizons),
+        (
+            "12 mixed charts, hole filling first",
+            mixed_set(12, 3),
+            FirstPacker::HoleFilling,
+        ),
+        (
+            "40 mixed charts (contact-scored holes)",
+            mixed_set(40, 5),
+            FirstPacker::Horizons,
+        ),
+    ];
+    for (what, charts, first_packer) in sets {
+        let borrowed = as_pack_charts(&charts);
+        let options = PackOptions {
+            first_packer,
+            ..PackOptions::default()
+        };
+        let best = pack_charts(&borrowed, &options, &mut go()).unwrap();
+        let cache = PackCache::new();
+        // Below the density the full search reaches: a denser packing, with every guarantee.
+        let low = best.texels_per_unit * 0.9;
+        let above = pack_charts_above(&borrowed, &options, low, &cache, &mut go())
+            .unwrap()
+            .unwrap_or_else(|| panic!("{what}: nothing found above {low}"));
+        assert!(
+            above.texels_per_unit > low,
+            "{what}: {}",
+            above.texels_per_unit
+        );
+        assert_guarantees(&check_packing(&borrowed, &above, &options), what);
+        // Where the charts would cover twice the page, nothing fits above: the search gives up
+        // instead of stepping down to what fits.
+        let (_, _, total_area_m2) = prepared_in_order(&borrowed);
+        let page = [options.width_texels, options.height_texels];
+        let too_dense = fill_density(total_area_m2, page) * (2.0 / FIT_START_FILL).sqrt();
+        let none = pack_charts_above(&borrowed, &options, too_dense, &cache, &mut go()).unwrap();
+        assert!(
+            none.is_none(),
+            "{what}: a packing above an impossible density"
+        );
+    }
+    // Only fit-to-page, from a finite positive density.
+    let charts = mixed_set(4, 1);
+    let borrowed = as_pack_charts(&charts);
+    let cache = PackCache::new();
+    let fixed = PackOptions {
+        density: TexelDensity::TexelsPerUnit(10.0),
+        ..PackOptions::default()
+    };
+    for (options, d) in [
+        (fixed, 10.0),
+        (PackOptions::default(), f64::NAN),
+        (PackOptions::default(), 0.0),
+    ] {
+        let r = pack_charts_above(&borrowed, &options, d, &cache, &mut go());
+        assert!(
+            matches!(r, Err(PackError::InvalidOption { .. })),
+            "{d}: {r:?}"
+        );
+    }
+}
