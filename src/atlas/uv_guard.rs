@@ -421,9 +421,8 @@ pub(super) fn sampled_folds(
 /// ([`cover_of_pairs`]: each split-off face is one more chart to pack), ascending. A chart's
 /// border that comes back on itself across a cut-out strip (craft_speederD: two border edges
 /// 3e-5 texels apart, a cut-out quad between them in 3-D) is valid in `f64` and crosses itself
-/// once rounded to `f32`: one face there crosses two.
-/// Also returns the exact overlap pairs found, for the report to reuse when these UVs are the
-/// final ones.
+/// once rounded to `f32`: one face there crosses two. Also returns the exact overlap pairs
+/// found, for the report to reuse when these UVs are the final ones.
 pub(super) fn exact_folds(
     mesh: &TriangleMesh,
     corner_uvs: &[[[f32; 2]; 3]],
@@ -437,26 +436,78 @@ pub(super) fn exact_folds(
 }
 
 /// Faces that meet every pair of `pairs`, chosen greedily: the face in the most pairs not met
-/// yet, ties to the smaller 3-D area, then the higher index; ascending. Deterministic.
+/// yet, ties to the smaller 3-D area, then the higher index; ascending. Deterministic;
+/// `O(k log k)` for `k` pairs (a heap of faces by pairs left, stale entries skipped), so a
+/// hostile input with millions of crossings costs no more than finding them.
 fn cover_of_pairs(mesh: &TriangleMesh, pairs: &[(u32, u32)]) -> Vec<FaceId> {
-    let mut left: Vec<(u32, u32)> = pairs.to_vec();
-    let mut chosen: Vec<FaceId> = Vec::new();
-    while !left.is_empty() {
-        let mut count: std::collections::BTreeMap<u32, usize> = Default::default();
-        for &(a, b) in &left {
-            *count.entry(a).or_default() += 1;
-            *count.entry(b).or_default() += 1;
+    use std::collections::{BTreeMap, BinaryHeap};
+    // Faces, densely numbered, and the pairs at each.
+    let mut index: BTreeMap<u32, usize> = BTreeMap::new();
+    for &(a, b) in pairs {
+        for f in [a, b] {
+            let next = index.len();
+            index.entry(f).or_insert(next);
         }
-        let area = |f: u32| mesh.face_area_m2(FaceId(f));
-        let Some((&pick, _)) = count.iter().max_by(|(fa, na), (fb, nb)| {
-            na.cmp(nb)
-                .then(area(**fb).total_cmp(&area(**fa)))
-                .then(fa.cmp(fb))
-        }) else {
-            break;
-        };
-        chosen.push(FaceId(pick));
-        left.retain(|&(a, b)| a != pick && b != pick);
+    }
+    let mut face = vec![0u32; index.len()];
+    for (&f, &i) in &index {
+        face[i] = f;
+    }
+    let mut at: Vec<Vec<usize>> = vec![Vec::new(); face.len()];
+    for (k, &(a, b)) in pairs.iter().enumerate() {
+        at[index[&a]].push(k);
+        at[index[&b]].push(k);
+    }
+    let mut left: Vec<usize> = at.iter().map(Vec::len).collect();
+    let mut met = vec![false; pairs.len()];
+    // Greater is picked first: more pairs left, then the smaller area, then the higher index.
+    #[derive(PartialEq)]
+    struct Entry {
+        left: usize,
+        area_m2: f64,
+        face: u32,
+        slot: usize,
+    }
+    impl Eq for Entry {}
+    impl Ord for Entry {
+        fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+            self.left
+                .cmp(&o.left)
+                .then(o.area_m2.total_cmp(&self.area_m2))
+                .then(self.face.cmp(&o.face))
+        }
+    }
+    impl PartialOrd for Entry {
+        fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+            Some(self.cmp(o))
+        }
+    }
+    let entry = |slot: usize, left: usize| Entry {
+        left,
+        area_m2: mesh.face_area_m2(FaceId(face[slot])),
+        face: face[slot],
+        slot,
+    };
+    let mut heap: BinaryHeap<Entry> = (0..face.len()).map(|i| entry(i, left[i])).collect();
+    let mut chosen: Vec<FaceId> = Vec::new();
+    while let Some(e) = heap.pop() {
+        if e.left != left[e.slot] || e.left == 0 {
+            continue;
+        }
+        chosen.push(FaceId(e.face));
+        for &k in &at[e.slot] {
+            if met[k] {
+                continue;
+            }
+            met[k] = true;
+            let (a, b) = pairs[k];
+            for g in [index[&a], index[&b]] {
+                left[g] -= 1;
+                if g != e.slot && left[g] > 0 {
+                    heap.push(entry(g, left[g]));
+                }
+            }
+        }
     }
     chosen.sort_unstable();
     chosen
@@ -564,6 +615,32 @@ mod tests {
         assert_eq!(folds([0.2, 0.2]), vec![FaceId(1)]);
         // Unfolded, on the other side of the shared edge: nothing.
         assert!(folds([0.45, 0.45]).is_empty());
+    }
+
+    #[test]
+    fn the_cover_takes_the_face_in_most_pairs_first_then_the_smaller() {
+        // Eight disjoint triangles, face i of area (i + 1) / 2.
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for i in 0..8u32 {
+            let x = 10.0 * f64::from(i);
+            positions.extend([
+                [x, 0.0, 0.0],
+                [x + 1.0, 0.0, 0.0],
+                [x, f64::from(i + 1), 0.0],
+            ]);
+            triangles.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        }
+        let mesh = build(&MeshInput::single_group(positions, triangles));
+        let cover = |pairs: &[(u32, u32)]| -> Vec<u32> {
+            cover_of_pairs(&mesh, pairs).iter().map(|f| f.0).collect()
+        };
+        // A star on face 6 and a lone pair: face 6 meets three pairs; of 1 and 5, the smaller.
+        assert_eq!(cover(&[(1, 6), (2, 6), (3, 6), (1, 5)]), vec![1, 6]);
+        // A path 0-1-2-3: faces 1 and 2 meet two pairs each; 1 is smaller, then (2, 3) is left,
+        // and 2 is the smaller of the two.
+        assert_eq!(cover(&[(0, 1), (1, 2), (2, 3)]), vec![1, 2]);
+        assert!(cover(&[]).is_empty());
     }
 
     #[test]

@@ -229,10 +229,7 @@ pub fn pack_charts_from(
     start_texels_per_unit: Option<f64>,
     progress: &mut StageProgress<'_>,
 ) -> Result<Packing, PackError> {
-    let from = match start_texels_per_unit {
-        Some(d) if d.is_finite() && d > 0.0 => SearchFrom::Guess(d),
-        _ => SearchFrom::Fill,
-    };
+    let from = SearchFrom::guess(start_texels_per_unit);
     pack_charts_with(charts, options, from, None, progress)
 }
 
@@ -245,10 +242,7 @@ pub fn pack_charts_cached(
     cache: &PackCache,
     progress: &mut StageProgress<'_>,
 ) -> Result<Packing, PackError> {
-    let from = match start_texels_per_unit {
-        Some(d) if d.is_finite() && d > 0.0 => SearchFrom::Guess(d),
-        _ => SearchFrom::Fill,
-    };
+    let from = SearchFrom::guess(start_texels_per_unit);
     pack_charts_with(charts, options, from, Some(cache), progress)
 }
 
@@ -298,6 +292,16 @@ enum SearchFrom {
     Above(f64),
 }
 
+impl SearchFrom {
+    /// From the caller's guess when it is a finite positive density, else from the fill.
+    fn guess(start_texels_per_unit: Option<f64>) -> Self {
+        match start_texels_per_unit {
+            Some(d) if d.is_finite() && d > 0.0 => SearchFrom::Guess(d),
+            _ => SearchFrom::Fill,
+        }
+    }
+}
+
 fn pack_charts_with(
     charts: &[PackChart<'_>],
     options: &PackOptions,
@@ -311,7 +315,8 @@ fn pack_charts_with(
         SearchFrom::Guess(d) => (FitStart::Guess(d), None),
         SearchFrom::Above(d) => (FitStart::Beat(d), Some(d)),
     };
-    // A packer's search that finds nothing above `above` is not an error while the other may.
+    // With `above`, a packer that finds nothing above it is not an error: the other packer may
+    // still find one (`None`).
     let found = |r: Result<Trial, PackError>| match r {
         Ok(t) => Ok(Some(t)),
         Err(PackError::DoesNotFit { .. }) if above.is_some() => Ok(None),
@@ -404,7 +409,8 @@ fn pack_charts_with(
         // The stage's progress stays at its end; the monitor can still cancel.
         let mut at_end = |_: (usize, usize)| monitor((1, 1));
         // Hole filling is kept only when it packs denser than the horizons: its search starts
-        // just above their density and gives up when that does not fit.
+        // just above their density (the caller's, when they found none above it) and gives up
+        // when that does not fit.
         match pack(&ctx, FitStart::Beat(floor.unwrap_or(0.0)), &mut at_end) {
             Ok(t) => {
                 let better = match (options.density, &trial) {
