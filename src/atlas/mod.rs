@@ -279,14 +279,10 @@ pub fn generate(
             .collect();
         let size = [options.pack.width_texels, options.pack.height_texels];
         let (face_page, num_pages) = (&written.face_page, written.packing.num_pages);
-        stats.uv_nudged_vertices += restore_slivers(
-            mesh,
-            &check,
-            &mut written.corner_uvs,
-            face_page,
-            size,
-            &|uvs| sampled_fold_faces(uvs, face_page, num_pages, size, &face_chart),
-        );
+        stats.uv_nudged_vertices +=
+            restore_slivers(mesh, &check, &mut written.corner_uvs, size, &|uvs| {
+                sampled_fold_faces(uvs, face_page, num_pages, size, &face_chart)
+            });
         let mut faults = outcome.unrepaired;
         if faults.is_empty() && round < GUARD_SPLIT_ROUNDS {
             faults = sampled_folds(

@@ -87,7 +87,7 @@ pub(super) fn guard_uvs(
     // 1. Collapse 3-D-degenerate faces with UV area (changes no other face).
     let shared = if (0..corner_uvs.len()).any(|f| check.degenerate_3d[f] && !check.uv_degenerate[f])
     {
-        SharedEdges::new(&UvVertices::new(mesh, corner_uvs, face_page))
+        SharedEdges::of(&check)
     } else {
         SharedEdges::default()
     };
@@ -99,7 +99,7 @@ pub(super) fn guard_uvs(
         .filter(|&f| check.fault(f) && !check.degenerate_3d[f])
         .collect();
     if !faulty.is_empty() {
-        let vertices = UvVertices::new(mesh, corner_uvs, face_page);
+        let vertices = UvVertices::of(&check);
         for &f in &faulty {
             if face_ok(&check, corner_uvs, f) {
                 continue; // repaired by an earlier nudge at a shared vertex
@@ -177,24 +177,12 @@ struct SharedEdges {
 }
 
 impl SharedEdges {
-    fn new(v: &UvVertices) -> Self {
-        let n = v.group_of_corner.len();
-        let pair = |h: usize| {
-            let (f, k) = (h / 3, h % 3);
-            let a = v.group_of_corner[3 * f + k];
-            let b = v.group_of_corner[3 * f + (k + 1) % 3];
-            (a.min(b), a.max(b))
-        };
-        let mut pairs: Vec<(u32, u32)> = (0..n).map(pair).collect();
-        pairs.sort_unstable();
-        let shared = (0..n)
-            .map(|h| {
-                let p = pair(h);
-                let lo = pairs.partition_point(|&q| q < p);
-                pairs.get(lo + 1) == Some(&p)
-            })
-            .collect();
-        Self { shared }
+    /// The shared half-edges of the UVs `check` was computed on: those not on a chart's UV
+    /// boundary (the report's connectivity, with the same UV vertex keys).
+    fn of(check: &OrientationCheck) -> Self {
+        Self {
+            shared: check.uv_boundary.iter().map(|&b| !b).collect(),
+        }
     }
 
     fn is_shared(&self, f: usize, k: usize) -> bool {
@@ -213,38 +201,29 @@ struct UvVertices {
 }
 
 impl UvVertices {
-    fn new(mesh: &TriangleMesh, corner_uvs: &[[[f32; 2]; 3]], face_page: &[u32]) -> Self {
-        let fold64 = |x: f64| if x == 0.0 { 0 } else { x.to_bits() };
-        let fold32 = |x: f32| if x == 0.0 { 0 } else { x.to_bits() };
-        type Key = (u32, [u64; 3], u32, [u32; 2]);
-        let mut keyed: Vec<(Key, u32)> = Vec::with_capacity(3 * corner_uvs.len());
-        for (f, uv) in corner_uvs.iter().enumerate() {
-            let vs = mesh.face_vertices(FaceId(f as u32));
-            for k in 0..3 {
-                let p = mesh.position(vs[k]);
-                keyed.push((
-                    (
-                        mesh.vertex_weld_group(vs[k]),
-                        p.map(fold64),
-                        face_page[f],
-                        uv[k].map(fold32),
-                    ),
-                    (3 * f + k) as u32,
-                ));
-            }
+    /// The UV vertices of the UVs `check` was computed on: its corner ids (the report's
+    /// connectivity numbers the same keys), grouped by a counting sort. Cost: O(corners).
+    fn of(check: &OrientationCheck) -> Self {
+        let group_of_corner = check.corner_id.clone();
+        let groups = group_of_corner
+            .iter()
+            .map(|&g| g as usize + 1)
+            .max()
+            .unwrap_or(0);
+        let mut start = vec![0u32; groups + 1];
+        for &g in &group_of_corner {
+            start[g as usize + 1] += 1;
         }
-        keyed.sort_unstable();
-        let mut group_of_corner = vec![0u32; keyed.len()];
-        let mut start = Vec::new();
-        let mut corners = Vec::with_capacity(keyed.len());
-        for (i, (key, c)) in keyed.iter().enumerate() {
-            if i == 0 || keyed[i - 1].0 != *key {
-                start.push(i as u32);
-            }
-            group_of_corner[*c as usize] = (start.len() - 1) as u32;
-            corners.push(*c);
+        for g in 0..groups {
+            start[g + 1] += start[g];
         }
-        start.push(keyed.len() as u32);
+        let mut next = start.clone();
+        let mut corners = vec![0u32; group_of_corner.len()];
+        // Corners in ascending order, so each group's come out ascending.
+        for (c, &g) in group_of_corner.iter().enumerate() {
+            corners[next[g as usize] as usize] = c as u32;
+            next[g as usize] += 1;
+        }
         Self {
             group_of_corner,
             start,
@@ -687,5 +666,77 @@ mod tests {
         // In two charts, the crossing is not a fold of a chart: nothing to split off.
         let (faces, _) = exact_folds(&mesh, &corner_uvs, pages, 1, &[0, 1, 1]);
         assert!(faces.is_empty());
+    }
+
+    #[test]
+    fn uv_vertices_and_shared_edges_follow_the_output_vertex_keys() {
+        // A fan of four faces around vertex 0 with a UV seam between faces 1 and 2, and a
+        // fifth face at vertex 0 on another page whose other two vertices are copies of
+        // vertices 1 and 2 in a second weld group. Keys are compared by brute force: glTF
+        // mesh, position bits, page, UV bits with -0.0 as 0.0.
+        let mut input = MeshInput::single_group(
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [-1.0, 0.0, 0.0],
+                [0.0, -1.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ],
+            vec![[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 1], [0, 5, 6]],
+        );
+        input.weld_group = vec![0, 0, 0, 0, 0, 1, 1];
+        let mesh = build(&input);
+        let corner_uvs: Vec<[[f32; 2]; 3]> = vec![
+            [[0.5, 0.5], [0.9, 0.5], [0.5, 0.9]],
+            [[0.5, 0.5], [0.5, 0.9], [0.1, 0.5]],
+            [[0.0, 0.5], [0.0, 0.1], [0.4, 0.1]],
+            [[-0.0, 0.5], [0.4, 0.1], [0.9, 0.5]],
+            [[0.5, 0.5], [0.9, 0.5], [0.5, 0.9]],
+        ];
+        let face_page = [0, 0, 0, 0, 1];
+        let check = orientation_check(&mesh, &corner_uvs, &face_page);
+        let key = |c: usize| {
+            let (f, k) = (c / 3, c % 3);
+            let v = mesh.face_vertices(FaceId(f as u32))[k];
+            let p = mesh
+                .position(v)
+                .map(|x| if x == 0.0 { 0 } else { x.to_bits() });
+            let uv = corner_uvs[f][k].map(|x| if x == 0.0 { 0 } else { x.to_bits() });
+            (mesh.vertex_weld_group(v), p, face_page[f], uv)
+        };
+        let vertices = UvVertices::of(&check);
+        for c in 0..15 {
+            let expected: Vec<u32> = (0..15)
+                .filter(|&d| key(d) == key(c))
+                .map(|d| d as u32)
+                .collect();
+            assert_eq!(vertices.group(c), expected.as_slice(), "corner {c}");
+        }
+        // Vertex 0 of faces 2 and 3 (0.0 and -0.0) is one UV vertex; face 4's copy of face
+        // 0's is another (its page).
+        assert_eq!(vertices.group(6), &[6, 9]);
+        assert_eq!(vertices.group(0), &[0, 3]);
+        let shared = SharedEdges::of(&check);
+        let ends = |h: usize| {
+            let (f, k) = (h / 3, h % 3);
+            let (a, b) = (key(3 * f + k), key(3 * f + (k + 1) % 3));
+            if a <= b {
+                (a, b)
+            } else {
+                (b, a)
+            }
+        };
+        for h in 0..15 {
+            let others = (0..15).filter(|&g| g != h && ends(g) == ends(h)).count();
+            assert_eq!(shared.is_shared(h / 3, h % 3), others > 0, "half-edge {h}");
+        }
+        // Inside a chart: faces 0 and 1 (edge 0-2), faces 2 and 3 (edge 0-4, through -0.0).
+        // Across the seam (edge 0-3 of faces 1 and 2) and everywhere on face 4: not shared.
+        assert!(shared.is_shared(0, 2) && shared.is_shared(1, 0));
+        assert!(shared.is_shared(2, 2) && shared.is_shared(3, 0));
+        assert!(!shared.is_shared(1, 2) && !shared.is_shared(2, 0));
+        assert!((0..3).all(|k| !shared.is_shared(4, k)));
     }
 }

@@ -35,6 +35,9 @@ pub(super) struct Connectivity {
     /// has its unordered corner-key pair, i.e. it lies on its chart's UV boundary (outer or
     /// hole).
     pub uv_boundary: Vec<bool>,
+    /// Per corner `3f + k`: its corner key's id (glTF mesh, position, page and UV bits, `-0.0`
+    /// as `0.0`), numbered `0..unique_corners`.
+    pub corner_id: Vec<u32>,
 }
 
 /// Bit pattern with `-0.0` folded onto `0.0`, as a signed integer: position ids are then
@@ -162,85 +165,91 @@ pub(super) fn connectivity(
     };
     // Steps 2–3 (corner ids, UV edges, charts) and the grouping of step 4 (3-D edges by
     // position-id pair) are independent until step 4's last loop: computed concurrently.
-    let ((num_cids, uv_edge_unique, chart_of_face, num_charts), (plo, phi, offsets, order)) =
-        rayon::join(
-            || {
-                let (offsets, mut order) = bucket_order(num_pids, &corner_pid);
-                let corner_key = |c: u32| {
-                    let (f, k) = (c as usize / 3, c as usize % 3);
-                    let uv = corner_uvs[f][k];
-                    (face_page[f], fold32(uv[0]), fold32(uv[1]), c)
-                };
-                let mut corner_id = vec![0u32; 3 * nf];
-                let mut num_cids = 0u32;
-                for b in 0..num_pids {
-                    let bucket = &mut order[offsets[b] as usize..offsets[b + 1] as usize];
-                    bucket.sort_unstable_by_key(|&c| corner_key(c));
-                    let mut prev = None;
-                    for &c in bucket.iter() {
-                        let (page, u, v, _) = corner_key(c);
-                        if prev.is_some() && prev != Some((page, u, v)) {
-                            num_cids += 1;
-                        }
-                        prev = Some((page, u, v));
-                        corner_id[c as usize] = num_cids;
-                    }
-                    if prev.is_some() {
+    let (
+        (num_cids, corner_id, uv_edge_unique, chart_of_face, num_charts),
+        (plo, phi, offsets, order),
+    ) = rayon::join(
+        || {
+            let (offsets, mut order) = bucket_order(num_pids, &corner_pid);
+            let corner_key = |c: u32| {
+                let (f, k) = (c as usize / 3, c as usize % 3);
+                let uv = corner_uvs[f][k];
+                (face_page[f], fold32(uv[0]), fold32(uv[1]), c)
+            };
+            let mut corner_id = vec![0u32; 3 * nf];
+            let mut num_cids = 0u32;
+            for b in 0..num_pids {
+                let bucket = &mut order[offsets[b] as usize..offsets[b + 1] as usize];
+                bucket.sort_unstable_by_key(|&c| corner_key(c));
+                let mut prev = None;
+                for &c in bucket.iter() {
+                    let (page, u, v, _) = corner_key(c);
+                    if prev.is_some() && prev != Some((page, u, v)) {
                         num_cids += 1;
                     }
+                    prev = Some((page, u, v));
+                    corner_id[c as usize] = num_cids;
                 }
-                let num_cids = num_cids as usize;
-                drop(order);
+                if prev.is_some() {
+                    num_cids += 1;
+                }
+            }
+            let num_cids = num_cids as usize;
+            drop(order);
 
-                // 3. Group half-edges by unordered corner-id pair (bucket by the lower id, then the higher).
-                let (lo, hi): (Vec<u32>, Vec<u32>) =
-                    (0..3 * nf).map(|e| ends(&corner_id, e)).unzip();
-                let (offsets, order) = pair_order(num_cids, &lo, &hi);
-                drop(lo);
-                let mut parent: Vec<u32> = (0..nf as u32).collect();
-                let mut uv_edge_unique = vec![false; 3 * nf];
-                for b in 0..num_cids {
-                    let bucket = &order[offsets[b] as usize..offsets[b + 1] as usize];
-                    let mut i = 0;
-                    while i < bucket.len() {
-                        let h = hi[bucket[i] as usize];
-                        let mut j = i + 1;
-                        while j < bucket.len() && hi[bucket[j] as usize] == h {
-                            union(&mut parent, bucket[j - 1] / 3, bucket[j] / 3);
-                            j += 1;
-                        }
-                        if j == i + 1 {
-                            uv_edge_unique[bucket[i] as usize] = true;
-                        }
-                        i = j;
+            // 3. Group half-edges by unordered corner-id pair (bucket by the lower id, then the higher).
+            let (lo, hi): (Vec<u32>, Vec<u32>) = (0..3 * nf).map(|e| ends(&corner_id, e)).unzip();
+            let (offsets, order) = pair_order(num_cids, &lo, &hi);
+            drop(lo);
+            let mut parent: Vec<u32> = (0..nf as u32).collect();
+            let mut uv_edge_unique = vec![false; 3 * nf];
+            for b in 0..num_cids {
+                let bucket = &order[offsets[b] as usize..offsets[b + 1] as usize];
+                let mut i = 0;
+                while i < bucket.len() {
+                    let h = hi[bucket[i] as usize];
+                    let mut j = i + 1;
+                    while j < bucket.len() && hi[bucket[j] as usize] == h {
+                        union(&mut parent, bucket[j - 1] / 3, bucket[j] / 3);
+                        j += 1;
                     }
+                    if j == i + 1 {
+                        uv_edge_unique[bucket[i] as usize] = true;
+                    }
+                    i = j;
                 }
-                drop((order, hi));
-                drop(corner_id);
+            }
+            drop((order, hi));
 
-                // Charts numbered by lowest face (= the root, since the smaller root always wins).
-                let mut chart_of_face = vec![0u32; nf];
-                let mut chart_of_root = vec![u32::MAX; nf];
-                let mut num_charts = 0u32;
-                for f in 0..nf as u32 {
-                    let r = find(&mut parent, f) as usize;
-                    if chart_of_root[r] == u32::MAX {
-                        chart_of_root[r] = num_charts;
-                        num_charts += 1;
-                    }
-                    chart_of_face[f as usize] = chart_of_root[r];
+            // Charts numbered by lowest face (= the root, since the smaller root always wins).
+            let mut chart_of_face = vec![0u32; nf];
+            let mut chart_of_root = vec![u32::MAX; nf];
+            let mut num_charts = 0u32;
+            for f in 0..nf as u32 {
+                let r = find(&mut parent, f) as usize;
+                if chart_of_root[r] == u32::MAX {
+                    chart_of_root[r] = num_charts;
+                    num_charts += 1;
                 }
-                drop(parent);
-                drop(chart_of_root);
-                (num_cids, uv_edge_unique, chart_of_face, num_charts)
-            },
-            || {
-                let (plo, phi): (Vec<u32>, Vec<u32>) =
-                    (0..3 * nf).map(|e| ends(&corner_pid, e)).unzip();
-                let (offsets, order) = pair_order(num_pids, &plo, &phi);
-                (plo, phi, offsets, order)
-            },
-        );
+                chart_of_face[f as usize] = chart_of_root[r];
+            }
+            drop(parent);
+            drop(chart_of_root);
+            (
+                num_cids,
+                corner_id,
+                uv_edge_unique,
+                chart_of_face,
+                num_charts,
+            )
+        },
+        || {
+            let (plo, phi): (Vec<u32>, Vec<u32>) =
+                (0..3 * nf).map(|e| ends(&corner_pid, e)).unzip();
+            let (offsets, order) = pair_order(num_pids, &plo, &phi);
+            (plo, phi, offsets, order)
+        },
+    );
 
     // 4. 3-D edges: group half-edges by unordered position-id pair.
     let mut seam_edges = 0usize;
@@ -295,5 +304,6 @@ pub(super) fn connectivity(
         boundary_length_3d_m: boundary,
         open_border_length_3d_m: open,
         uv_boundary: uv_edge_unique,
+        corner_id,
     }
 }

@@ -607,6 +607,12 @@ pub(crate) struct OrientationCheck {
     pub chart_of_face: Vec<u32>,
     /// Orientation of each chart (positive when its signed area is ≥ 0).
     pub chart_positive: Vec<bool>,
+    /// Per corner `3f + k`: the id of its UV vertex (the output's vertex key: glTF mesh,
+    /// position, page and UV bits, `-0.0` as `0.0`), numbered `0..unique_corners`.
+    pub corner_id: Vec<u32>,
+    /// Per half-edge `3f + k`: no other half-edge joins the same two UV vertices (it lies on
+    /// its chart's UV boundary).
+    pub uv_boundary: Vec<bool>,
 }
 
 impl OrientationCheck {
@@ -639,6 +645,8 @@ pub(crate) fn orientation_check(
         degenerate_3d: geo.degenerate_3d,
         chart_of_face: con.chart_of_face,
         chart_positive,
+        corner_id: con.corner_id,
+        uv_boundary: con.uv_boundary,
     }
 }
 

@@ -80,7 +80,6 @@ pub(in crate::atlas) fn restore_slivers(
     mesh: &TriangleMesh,
     check: &OrientationCheck,
     corner_uvs: &mut [[[f32; 2]; 3]],
-    face_page: &[u32],
     size: [u32; 2],
     folds: &Folds,
 ) -> usize {
@@ -106,7 +105,7 @@ pub(in crate::atlas) fn restore_slivers(
             continue;
         };
         let group = vertices
-            .get_or_insert_with(|| UvVertices::new(mesh, corner_uvs, face_page))
+            .get_or_insert_with(|| UvVertices::of(check))
             .group(3 * f + apex);
         // A 3-D-degenerate face at the vertex was collapsed to a segment by a corner of its
         // own (another key): moving this one would give it area again.
@@ -473,7 +472,7 @@ mod tests {
             "the setup is a sliver with a high L∞: {before}"
         );
         let check = orientation_check(&mesh, &uvs, &[0, 0]);
-        let moved = restore_slivers(&mesh, &check, &mut uvs, &[0, 0], [64, 64], &|_| Vec::new());
+        let moved = restore_slivers(&mesh, &check, &mut uvs, [64, 64], &|_| Vec::new());
         let after = face_linf(&mesh, 0, &uvs[0], k);
         assert_eq!(moved, 1);
         assert!(after < before / 2.0, "L∞ {before} -> {after}");
@@ -495,9 +494,7 @@ mod tests {
         let check = orientation_check(&mesh, &start, &[0, 0]);
         // The apex alone (a fold check that refuses every base move) leaves it above the bar.
         let mut apex_only = start;
-        restore_slivers(&mesh, &check, &mut apex_only, &[0, 0], [64, 64], &|_| {
-            vec![0, 1]
-        });
+        restore_slivers(&mesh, &check, &mut apex_only, [64, 64], &|_| vec![0, 1]);
         let apex_alone = face_linf(&mesh, 0, &apex_only[0], k);
         assert!(
             apex_alone > BASE_SEARCH_ABOVE_LINF,
@@ -510,7 +507,7 @@ mod tests {
         // With the base search kept: far lower, a base vertex moved by at most
         // BASE_SEARCH_ULPS spacings, both faces oriented as before.
         let mut uvs = start;
-        let moved = restore_slivers(&mesh, &check, &mut uvs, &[0, 0], [64, 64], &|_| Vec::new());
+        let moved = restore_slivers(&mesh, &check, &mut uvs, [64, 64], &|_| Vec::new());
         let after = face_linf(&mesh, 0, &uvs[0], k);
         assert!(moved >= 2);
         assert!(after < apex_alone / 2.0, "L∞ {apex_alone} -> {after}");
