@@ -259,7 +259,7 @@ pub fn generate(
     let mut parameterized = parameterized;
     let mut packing_of_cut_step = packing_of_cut_step;
     let mut round = 0;
-    let (written, charts, exact_found) = loop {
+    let (written, charts, reuse) = loop {
         let mut exact_found = None;
         let mut written = pack_and_write(
             mesh,
@@ -279,10 +279,10 @@ pub fn generate(
             .collect();
         let size = [options.pack.width_texels, options.pack.height_texels];
         let (face_page, num_pages) = (&written.face_page, written.packing.num_pages);
-        stats.uv_nudged_vertices +=
-            restore_slivers(mesh, &check, &mut written.corner_uvs, size, &|uvs| {
-                sampled_fold_faces(uvs, face_page, num_pages, size, &face_chart)
-            });
+        let moved = restore_slivers(mesh, &check, &mut written.corner_uvs, size, &|uvs| {
+            sampled_fold_faces(uvs, face_page, num_pages, size, &face_chart)
+        });
+        stats.uv_nudged_vertices += moved;
         let mut faults = outcome.unrepaired;
         if faults.is_empty() && round < GUARD_SPLIT_ROUNDS {
             faults = sampled_folds(
@@ -307,7 +307,14 @@ pub fn generate(
             exact_found = Some(exact);
         }
         if faults.is_empty() || round == GUARD_SPLIT_ROUNDS {
-            break (written, parameterized.segmentation.charts, exact_found);
+            // The report reuses the guard's searches on these UVs: its exact overlaps, and its
+            // orientation check unless the sliver repair moved a vertex since.
+            let check = (moved == 0).then_some(check);
+            let reuse = measure::Reuse {
+                exact: exact_found,
+                check,
+            };
+            break (written, parameterized.segmentation.charts, reuse);
         }
         stats.uv_guard_splits += faults.len();
         parameterized = split_off_faces(mesh, &parameterized, &faults, options)?;
@@ -343,10 +350,7 @@ pub fn generate(
         height_texels: options.pack.height_texels,
         padding_texels: options.pack.padding_texels,
     };
-    let report = match exact_found {
-        Some(exact) => measure::measure_atlas_with_exact(&input, exact),
-        None => measure_atlas(&input),
-    };
+    let report = measure::measure_atlas_reusing(&input, reuse);
     check(progress.advance(Stage::Measure, 1, 1), Stage::Measure)?;
     progress.stage_finished(Stage::Measure);
 

@@ -482,7 +482,7 @@ pub(crate) fn sampled_same_chart_pairs(
 /// at most [`EXACT_OVERLAP_PAIRS_MAX`]) of one set of written UVs, found before the atlas is
 /// measured ([`exact_overlaps`]): for the pipeline's last line of defence (`uv_guard.rs`),
 /// where a fold thinner than the raster's rounding covers no texel centre and only this test
-/// sees it, and then for [`measure_atlas_with_exact`] on the same UVs, which does not search
+/// sees it, and then for [`measure_atlas_reusing`] on the same UVs, which does not search
 /// again.
 pub(crate) struct ExactOverlaps {
     pairs: overlap::ExactPairs,
@@ -510,13 +510,45 @@ pub(crate) fn exact_overlaps(
     }
 }
 
-/// [`measure_atlas`] with the exact overlap pairs already found on these very UVs
-/// ([`exact_overlaps`] of `input.corner_uvs`, `input.face_page`, `input.num_pages`): the same
-/// report, without searching them again. Debug builds search again and check they agree.
-pub(crate) fn measure_atlas_with_exact(
-    input: &MeasureInput<'_>,
-    exact: ExactOverlaps,
-) -> AtlasReport {
+/// What [`measure_atlas_reusing`] need not compute again: searches and checks already run on
+/// the very UVs it measures.
+#[derive(Default)]
+pub(crate) struct Reuse {
+    /// [`exact_overlaps`] of `input.corner_uvs`, `input.face_page`, `input.num_pages`.
+    pub exact: Option<ExactOverlaps>,
+    /// [`orientation_check`] of `input.mesh`, `input.corner_uvs`, `input.face_page`.
+    pub check: Option<OrientationCheck>,
+}
+
+/// [`measure_atlas`] with what `reuse` holds already found on these very UVs: the same report,
+/// without computing it again. Debug builds compute it again and check that it agrees.
+pub(crate) fn measure_atlas_reusing(input: &MeasureInput<'_>, reuse: Reuse) -> AtlasReport {
+    assert_input(input);
+    let Reuse { exact, check } = reuse;
+    if let Some(check) = &check {
+        assert_eq!(
+            (check.signed_uv_area.len(), check.corner_id.len()),
+            (input.corner_uvs.len(), 3 * input.corner_uvs.len()),
+            "an orientation check of other UVs"
+        );
+        debug_assert!(
+            same_check(
+                check,
+                &orientation_check(input.mesh, input.corner_uvs, input.face_page)
+            ),
+            "an orientation check of other UVs"
+        );
+    }
+    let Some(exact) = exact else {
+        // The exact-overlap search needs no chart ids (its pairs are classified at the end), so
+        // it runs concurrently with everything else.
+        let ((mut report, chart_of_face), exact_pairs) = rayon::join(
+            || measure_without_exact_overlaps(input, check),
+            || overlap::exact_overlap_pairs(input.corner_uvs, input.face_page, input.num_pages),
+        );
+        report.overlap.exact = exact_pairs.classify(&chart_of_face);
+        return report;
+    };
     assert_eq!(
         exact.shape,
         (input.corner_uvs.len(), input.num_pages),
@@ -530,16 +562,50 @@ pub(crate) fn measure_atlas_with_exact(
         )),
         "exact overlap pairs of other UVs"
     );
-    let (mut report, chart_of_face) = measure_without_exact_overlaps(input);
+    let (mut report, chart_of_face) = measure_without_exact_overlaps(input, check);
     report.overlap.exact = exact.pairs.classify(&chart_of_face);
     report
+}
+
+/// Whether two orientation checks agree bit for bit (debug builds' check of a reused one).
+fn same_check(a: &OrientationCheck, b: &OrientationCheck) -> bool {
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let edges = |v: &[[f64; 3]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let (ra, rb) = (&a.rest, &b.rest);
+    bits(&a.signed_uv_area) == bits(&b.signed_uv_area)
+        && a.uv_degenerate == b.uv_degenerate
+        && a.degenerate_3d == b.degenerate_3d
+        && a.chart_of_face == b.chart_of_face
+        && a.chart_positive == b.chart_positive
+        && a.corner_id == b.corner_id
+        && a.uv_boundary == b.uv_boundary
+        && bits(&ra.area_3d_m2) == bits(&rb.area_3d_m2)
+        && edges(&ra.edge_len_m) == edges(&rb.edge_len_m)
+        && (ra.num_charts, ra.unique_corners, ra.seam_edges)
+            == (rb.num_charts, rb.unique_corners, rb.seam_edges)
+        && [
+            ra.seam_length_3d_m,
+            ra.boundary_length_3d_m,
+            ra.open_border_length_3d_m,
+        ]
+        .map(f64::to_bits)
+            == [
+                rb.seam_length_3d_m,
+                rb.boundary_length_3d_m,
+                rb.open_border_length_3d_m,
+            ]
+            .map(f64::to_bits)
 }
 
 /// Measures the atlas. Pure and deterministic. Panics on the precondition violations listed on
 /// [`MeasureInput`]. Cost: see the module doc.
 pub fn measure_atlas(input: &MeasureInput<'_>) -> AtlasReport {
-    let mesh = input.mesh;
-    let nf = mesh.num_faces();
+    measure_atlas_reusing(input, Reuse::default())
+}
+
+/// Panics on the precondition violations listed on [`MeasureInput`].
+fn assert_input(input: &MeasureInput<'_>) {
+    let nf = input.mesh.num_faces();
     assert_eq!(input.corner_uvs.len(), nf, "one corner_uvs entry per face");
     assert_eq!(input.face_page.len(), nf, "one face_page entry per face");
     assert!(input.num_pages >= 1, "num_pages >= 1");
@@ -551,15 +617,6 @@ pub fn measure_atlas(input: &MeasureInput<'_>) -> AtlasReport {
         input.face_page.iter().all(|&p| p < input.num_pages),
         "every face_page < num_pages"
     );
-
-    // The exact-overlap search needs no chart ids (its pairs are classified at the end), so it
-    // runs concurrently with everything else.
-    let ((mut report, chart_of_face), exact_pairs) = rayon::join(
-        || measure_without_exact_overlaps(input),
-        || overlap::exact_overlap_pairs(input.corner_uvs, input.face_page, input.num_pages),
-    );
-    report.overlap.exact = exact_pairs.classify(&chart_of_face);
-    report
 }
 
 /// Per chart, the sequential sum of `A2` over its non-UV-degenerate faces in face order (as
@@ -613,6 +670,48 @@ pub(crate) struct OrientationCheck {
     /// Per half-edge `3f + k`: no other half-edge joins the same two UV vertices (it lies on
     /// its chart's UV boundary).
     pub uv_boundary: Vec<bool>,
+    /// The rest of the report's geometry and connectivity of these UVs, for the report to
+    /// reuse ([`measure_atlas_reusing`]).
+    rest: CheckRest,
+}
+
+/// What [`OrientationCheck`] keeps of [`geometry::FaceGeometry`] and [`charts::Connectivity`]
+/// beyond its public fields.
+struct CheckRest {
+    area_3d_m2: Vec<f64>,
+    edge_len_m: Vec<[f64; 3]>,
+    num_charts: usize,
+    unique_corners: usize,
+    seam_edges: usize,
+    seam_length_3d_m: f64,
+    boundary_length_3d_m: f64,
+    open_border_length_3d_m: f64,
+}
+
+impl OrientationCheck {
+    /// The geometry and connectivity the check was computed from, whole again.
+    fn into_parts(self) -> (geometry::FaceGeometry, charts::Connectivity) {
+        let r = self.rest;
+        let geo = geometry::FaceGeometry {
+            area_3d_m2: r.area_3d_m2,
+            signed_uv_area: self.signed_uv_area,
+            uv_degenerate: self.uv_degenerate,
+            degenerate_3d: self.degenerate_3d,
+            edge_len_m: r.edge_len_m,
+        };
+        let con = charts::Connectivity {
+            chart_of_face: self.chart_of_face,
+            num_charts: r.num_charts,
+            unique_corners: r.unique_corners,
+            seam_edges: r.seam_edges,
+            seam_length_3d_m: r.seam_length_3d_m,
+            boundary_length_3d_m: r.boundary_length_3d_m,
+            open_border_length_3d_m: r.open_border_length_3d_m,
+            uv_boundary: self.uv_boundary,
+            corner_id: self.corner_id,
+        };
+        (geo, con)
+    }
 }
 
 impl OrientationCheck {
@@ -647,15 +746,37 @@ pub(crate) fn orientation_check(
         chart_positive,
         corner_id: con.corner_id,
         uv_boundary: con.uv_boundary,
+        rest: CheckRest {
+            area_3d_m2: geo.area_3d_m2,
+            edge_len_m: geo.edge_len_m,
+            num_charts: con.num_charts,
+            unique_corners: con.unique_corners,
+            seam_edges: con.seam_edges,
+            seam_length_3d_m: con.seam_length_3d_m,
+            boundary_length_3d_m: con.boundary_length_3d_m,
+            open_border_length_3d_m: con.open_border_length_3d_m,
+        },
     }
 }
 
-/// Everything [`measure_atlas`] measures but the exact overlaps, and the chart of each face.
-fn measure_without_exact_overlaps(input: &MeasureInput<'_>) -> (AtlasReport, Vec<u32>) {
+/// Everything [`measure_atlas`] measures but the exact overlaps, and the chart of each face;
+/// with `check`, the [`orientation_check`] of these very UVs, its geometry and connectivity
+/// are not computed again.
+fn measure_without_exact_overlaps(
+    input: &MeasureInput<'_>,
+    check: Option<OrientationCheck>,
+) -> (AtlasReport, Vec<u32>) {
     let mesh = input.mesh;
     let nf = mesh.num_faces();
-    let geo = geometry::face_geometry(mesh, input.corner_uvs);
-    let con = charts::connectivity(mesh, input.corner_uvs, input.face_page, &geo.edge_len_m);
+    let (geo, con) = match check {
+        Some(check) => check.into_parts(),
+        None => {
+            let geo = geometry::face_geometry(mesh, input.corner_uvs);
+            let con =
+                charts::connectivity(mesh, input.corner_uvs, input.face_page, &geo.edge_len_m);
+            (geo, con)
+        }
+    };
     let mut report = AtlasReport {
         triangles: nf,
         unique_corners: con.unique_corners,
