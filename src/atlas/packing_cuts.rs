@@ -244,15 +244,9 @@ pub(super) fn cut_for_packing(
                         triangles: &cm.triangles,
                         area_m2: 0.0,
                     })?;
-                    let (mut near, mut far) = (Vec::new(), Vec::new());
-                    for (&f, &beyond) in faces.iter().zip(&side) {
-                        if beyond {
-                            far.push(f);
-                        } else {
-                            near.push(f);
-                        }
-                    }
-                    Some((near, far))
+                    // The cut follows triangle edges across the neck: its teeth go to the
+                    // other side, as on the borders the segmentation grows.
+                    Some(segment::smooth_cut(mesh, faces, &side))
                 })
             } else {
                 None

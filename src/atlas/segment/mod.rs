@@ -783,22 +783,39 @@ pub(super) fn grow_two(
             }
         }
     }
-    // Smooth the border between the halves (`smooth.rs`), the seeds fixed. The cost is the edge
-    // length, a tenth of it on a hard edge (the segmentation's default hard-edge angle): this
-    // stage has no feature curves, and a split should still end on a crease where one is near.
-    // The side of the `i`-th sorted face `f`, read as the growth stored it.
+    smooth_halves(mesh, &sorted, dense, &mut side, &[a, b])
+}
+
+/// The two parts of `sorted` (a chart's faces, ascending) by `side` (1 or 2 per face: per
+/// face of the mesh when `dense`, else per position in `sorted`), after the border between them
+/// is smoothed (`smooth.rs`: teeth move to the other part, the faces of `pinned` stay, each
+/// part keeps at least half of its faces). The cost of a border edge is its length, a tenth of
+/// it on a hard edge (the segmentation's default hard-edge angle): splits have no feature
+/// curves, and a cut should still end on a crease where one is near.
+fn smooth_halves(
+    mesh: &TriangleMesh,
+    sorted: &[FaceId],
+    dense: bool,
+    side: &mut [u8],
+    pinned: &[FaceId],
+) -> (Vec<FaceId>, Vec<FaceId>) {
+    let slot = |f: FaceId| {
+        if dense {
+            Some(f.index()).filter(|&k| k < mesh.num_faces())
+        } else {
+            sorted.binary_search(&f).ok()
+        }
+    };
+    // The side of the `i`-th sorted face `f`, as stored.
     let side_at = |side: &[u8], i: usize, f: FaceId| if dense { side[f.index()] } else { side[i] };
     let mut sizes = [0usize; 3];
     for (i, &f) in sorted.iter().enumerate() {
-        sizes[usize::from(side_at(&side, i, f))] += 1;
+        sizes[usize::from(side_at(side, i, f))] += 1;
     }
     sizes[0] = 0;
     smooth::smooth_borders(
         mesh,
-        &mut smooth::SlotLabels {
-            labels: &mut side,
-            slot,
-        },
+        &mut smooth::SlotLabels { labels: side, slot },
         &|h| {
             let hard = mesh
                 .dihedral_angle_rad(h)
@@ -810,23 +827,41 @@ pub(super) fn grow_two(
                     1.0
                 }
         },
-        &sorted,
-        &[a, b],
+        sorted,
+        pinned,
         &mut sizes,
     );
     let half_a: Vec<FaceId> = sorted
         .iter()
         .enumerate()
-        .filter(|&(i, &f)| side_at(&side, i, f) != 2)
+        .filter(|&(i, &f)| side_at(side, i, f) != 2)
         .map(|(_, &f)| f)
         .collect();
     let half_b = sorted
         .iter()
         .enumerate()
-        .filter(|&(i, &f)| side_at(&side, i, f) == 2)
+        .filter(|&(i, &f)| side_at(side, i, f) == 2)
         .map(|(_, &f)| f)
         .collect();
     (half_a, half_b)
+}
+
+/// A chart cut in two by `far` (one flag per face of `faces`, in its order: the far side), with
+/// the border between the parts smoothed as in [`grow_two`] (no face pinned; each part keeps
+/// at least half of its faces): the near faces, then the far ones, each ascending.
+pub(super) fn smooth_cut(
+    mesh: &TriangleMesh,
+    faces: &[FaceId],
+    far: &[bool],
+) -> (Vec<FaceId>, Vec<FaceId>) {
+    let sorted = sorted_faces(faces);
+    let mut side = vec![1u8; sorted.len()];
+    for (&f, &beyond) in faces.iter().zip(far) {
+        if let (Ok(k), true) = (sorted.binary_search(&f), beyond) {
+            side[k] = 2;
+        }
+    }
+    smooth_halves(mesh, &sorted, false, &mut side, &[])
 }
 
 /// Merges adjacent charts, smallest chart first, while there are more than `cap` charts and the

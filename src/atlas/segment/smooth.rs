@@ -232,7 +232,8 @@ mod tests {
     use super::*;
     use crate::atlas::segment::tests::{build, subdivided_cube};
     use crate::atlas::segment::{
-        check_chart_is_disk, enforce_disks, graph_cut, grow_two, smooth_charts, SegmentStats,
+        check_chart_is_disk, enforce_disks, graph_cut, grow_two, smooth_charts, smooth_cut,
+        SegmentStats,
     };
     use crate::mesh::{fixtures, MeshInput};
     use proptest::prelude::*;
@@ -309,6 +310,29 @@ mod tests {
         }
         for c in charts_of(&mesh, &labels, 2) {
             check_chart_is_disk(&mesh, &c).expect("a disk");
+        }
+    }
+
+    #[test]
+    fn a_cut_given_by_sides_loses_its_teeth() {
+        // The toothed grid's labels as the far side of a cut (the packing cuts' neck): the
+        // parts come back with the straight border x = 10, the near part first, as disks.
+        let (mesh, labels) = toothed_grid();
+        // In descending order: the parts come back ascending whatever the order given.
+        let mut faces: Vec<FaceId> = mesh.faces().collect();
+        faces.reverse();
+        let far: Vec<bool> = faces.iter().map(|f| labels[f.index()] == 1).collect();
+        let (near, far) = smooth_cut(&mesh, &faces, &far);
+        assert_eq!(near.len() + far.len(), faces.len());
+        assert!(near.windows(2).all(|w| w[0] < w[1]) && far.windows(2).all(|w| w[0] < w[1]));
+        for f in &near {
+            assert!((f.0 / 2) % NX < 10, "face {f:?}");
+        }
+        for f in &far {
+            assert!((f.0 / 2) % NX >= 10, "face {f:?}");
+        }
+        for part in [near, far] {
+            check_chart_is_disk(&mesh, &part).expect("a disk");
         }
     }
 
