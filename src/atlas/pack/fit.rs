@@ -12,7 +12,8 @@ use super::{
 /// one that does not are known, then bisection; then the [`FIT_PROBES`] densities above the
 /// bracket, upwards until one does not fit ([`FitSearch`]). A failing trial stops at its first
 /// chart that does not fit (with hole filling, after
-/// [`HOLE_SKIPS_MAX`](super::HOLE_SKIPS_MAX)), so it costs at most a full one. Deterministic;
+/// [`HOLE_SKIPS_MAX`](super::HOLE_SKIPS_MAX) until a density has fitted: only then does the
+/// search step by how much did not fit), so it costs at most a full one. Deterministic;
 /// at most [`MAX_FIT_TRIALS`] + [`FIT_PROBES`] trials (+1 last-resort trial at a density where every
 /// chart is below a texel). The trials run one after another, each using every thread
 /// (footprints, horizon sides, hole-search orientations).
@@ -77,7 +78,14 @@ pub(super) fn fit_to_page(
     };
     let mut fit: Option<Trial> = None;
     loop {
-        let t = ctx.run(d, false, &mut progress)?;
+        // Once a density is known to fit (or when a failure here ends the search), a trial
+        // that does not fit only closes the bracket: the search does not read how much did not
+        // fit (`FitSearch::next` bisects), so hole filling need not go on past its first miss.
+        let t = if fit.is_some() || beat.is_some_and(|b| d <= b) {
+            ctx.run_to_first_miss(d, &mut progress)?
+        } else {
+            ctx.run(d, false, &mut progress)?
+        };
         let fitted = t.unplaced == 0;
         if !fitted && beat.is_some_and(|b| d <= b) {
             // Nothing above the density to beat fits where it was tried.
@@ -226,5 +234,49 @@ impl FitSearch {
             (None, _) if self.floor.is_some() => (d / ratio).max(self.floor?),
             _ => d / ratio,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What `fit_to_page` relies on to stop a failing trial at its first miss once a density
+    /// has fitted: from then on the search never reads how much a failing trial left out.
+    #[test]
+    fn after_a_fit_a_failure_steers_the_search_whatever_its_ratio() {
+        for (probes, tolerance, guessed) in [
+            (FIT_PROBES, FIT_TOLERANCE, false),
+            (0, HOLE_FIT_TOLERANCE, true),
+        ] {
+            let fresh = FitSearch {
+                probes,
+                tolerance,
+                guessed,
+                ..FitSearch::default()
+            };
+            // Every pattern of fits and failures over 8 trials, each failure tried with two
+            // very different ratios once a fit is known: the same next densities.
+            for pattern in 0u32..256 {
+                let (mut a, mut b) = (fresh.clone(), fresh.clone());
+                let mut d = 100.0;
+                let mut fitted_once = false;
+                for k in 0..8 {
+                    let fits = pattern >> k & 1 == 1;
+                    let (ra, rb) = if fits || !fitted_once {
+                        (0.9, 0.9)
+                    } else {
+                        (1.01, 7.0)
+                    };
+                    let (na, nb) = (a.next(d, fits, ra), b.next(d, fits, rb));
+                    assert_eq!(na, nb, "pattern {pattern:08b}, trial {k}");
+                    fitted_once |= fits;
+                    match na {
+                        Some(n) => d = n,
+                        None => break,
+                    }
+                }
+            }
+        }
     }
 }
