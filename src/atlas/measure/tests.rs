@@ -462,3 +462,44 @@ fn packing_bound_counts_the_boundary_of_a_hole() {
         r.packing_bound
     );
 }
+
+#[test]
+fn reusing_the_guards_searches_gives_the_same_report() {
+    // Two squares on the same UVs (overlaps, two charts), the second cut along its diagonal
+    // (a seam) and on a second page in one variant: every combination of what is reused
+    // gives measure_atlas's report.
+    let mut pos = SQUARE.to_vec();
+    pos.extend(SQUARE.iter().map(|p| [p[0] + 5.0, p[1], p[2]]));
+    let tris = [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]];
+    let mut uvs = square_uvs([0.25, 0.25], [0.5, 0.5]);
+    let mut second = square_uvs([0.25, 0.25], [0.5, 0.5]);
+    second[1] = second[1].map(|[u, v]| [u + 0.01, v]);
+    uvs.extend(second);
+    for pages in [vec![0, 0, 0, 0], vec![0, 0, 1, 1]] {
+        let mut c = case(&pos, &tris, &uvs);
+        c.pages = pages;
+        let num_pages = 1 + c.pages.iter().max().copied().unwrap_or(0);
+        let input = MeasureInput {
+            mesh: &c.mesh,
+            corner_uvs: &c.uvs,
+            face_page: &c.pages,
+            num_pages,
+            width_texels: 32,
+            height_texels: 32,
+            padding_texels: 2,
+        };
+        let expected = measure_atlas(&input);
+        assert!(expected.charts >= 2);
+        for (with_exact, with_check) in [(true, false), (false, true), (true, true)] {
+            let reuse = Reuse {
+                exact: with_exact.then(|| exact_overlaps(&c.uvs, &c.pages, num_pages)),
+                check: with_check.then(|| orientation_check(&c.mesh, &c.uvs, &c.pages)),
+            };
+            assert_eq!(
+                measure_atlas_reusing(&input, reuse),
+                expected,
+                "exact {with_exact}, check {with_check}"
+            );
+        }
+    }
+}
