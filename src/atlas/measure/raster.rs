@@ -124,8 +124,9 @@ pub(super) fn rasterize_pages(
     };
     // (global texel, face) samples on multiply covered texels, all pages.
     let mut multi_samples: Vec<(u64, u32)> = Vec::new();
+    // Every band sets its own part of both before using it (pass 1), page after page.
     let mut cov = vec![0u8; texels];
-    let mut label = vec![-1i32; texels];
+    let mut label = vec![0i32; texels];
     for (page, faces) in faces_of_page.iter().enumerate() {
         // Faces whose UV box meets the unit square, and the fixed-point scale.
         let mut cand_max = 0.0f64;
