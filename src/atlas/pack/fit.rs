@@ -5,7 +5,7 @@ use std::ops::ControlFlow;
 
 use super::{
     uv_extent, Context, PackError, Steps, Trial, FIT_PROBES, FIT_PROBE_STEP, FIT_TOLERANCE,
-    HOLE_FIT_TOLERANCE, MAX_FIT_TRIALS,
+    HOLE_FILL_BELOW, HOLE_FIT_TOLERANCE, HOLE_SCORED_MIN_CHARTS, MAX_FIT_TRIALS,
 };
 /// The largest density (within [`FIT_TOLERANCE`]) at which one page holds every chart: a
 /// search on log density: steps from the last trial's fill ratio until a density that fits and
@@ -65,8 +65,17 @@ pub(super) fn fit_to_page(
         }
     };
     let mut d = clamp_d(d);
+    // With many charts, the horizons' packing is packed again by hole filling when it stays
+    // below `HOLE_FILL_BELOW` (`super::pack_charts_with`), searching only above its density:
+    // probes that cannot lift it to that efficiency would only raise the floor of that search.
+    let probes_from = if !ctx.holes && ctx.order.len() >= HOLE_SCORED_MIN_CHARTS {
+        (HOLE_FILL_BELOW * f64::from(w) * f64::from(h) / total_area).sqrt()
+    } else {
+        0.0
+    };
     let mut search = FitSearch {
         probes: if ctx.holes { 0 } else { FIT_PROBES },
+        probes_from,
         tolerance: if ctx.holes {
             HOLE_FIT_TOLERANCE
         } else {
@@ -148,6 +157,9 @@ pub(super) struct FitSearch {
     probes: usize,
     probe: usize,
     probe_base: f64,
+    /// The probes run only when the last of them, `lo · (1 + probes · FIT_PROBE_STEP)`,
+    /// would reach this density (0: always).
+    probes_from: f64,
     /// The bracket closes at this ratio: [`FIT_TOLERANCE`], or [`HOLE_FIT_TOLERANCE`] when
     /// filling holes.
     tolerance: f64,
@@ -209,7 +221,8 @@ impl FitSearch {
             matches!((self.lo, self.hi), (Some(l), Some(n)) if n <= l * (1.0 + self.tolerance));
         if closed || self.steps >= MAX_FIT_TRIALS {
             let lo = self.lo?;
-            if self.probes == 0 {
+            let highest_probe = lo * (1.0 + FIT_PROBE_STEP * self.probes as f64);
+            if self.probes == 0 || highest_probe < self.probes_from {
                 return None;
             }
             self.probe = 1;
@@ -240,6 +253,27 @@ impl FitSearch {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The probes above a closed bracket run only when the last of them would reach
+    /// `probes_from`; otherwise the search ends at the bracket.
+    #[test]
+    fn probes_run_only_when_they_could_reach_their_floor() {
+        let bracket = |probes_from: f64| {
+            let mut s = FitSearch {
+                probes: FIT_PROBES,
+                tolerance: FIT_TOLERANCE,
+                probes_from,
+                ..FitSearch::default()
+            };
+            // 100 fits, 100.2 does not: the bracket closes (0.2 % < FIT_TOLERANCE).
+            s.next(100.0, true, 0.999);
+            s.next(100.2, false, 1.01)
+        };
+        let highest = 100.0 * (1.0 + FIT_PROBE_STEP * FIT_PROBES as f64);
+        assert_eq!(bracket(0.0), Some(100.0 * (1.0 + FIT_PROBE_STEP)));
+        assert_eq!(bracket(highest), Some(100.0 * (1.0 + FIT_PROBE_STEP)));
+        assert_eq!(bracket(highest * 1.001), None);
+    }
 
     /// What `fit_to_page` relies on to stop a failing trial at its first miss once a density
     /// has fitted: from then on the search never reads how much a failing trial left out.
