@@ -5,8 +5,7 @@ use std::ops::ControlFlow;
 
 use super::{
     uv_extent, Context, PackError, Steps, Trial, FIT_PROBES, FIT_PROBE_STEP, FIT_TOLERANCE,
-    HOLE_AREA_FIT_TOLERANCE, HOLE_AREA_STEPS_MIN_CHARTS, HOLE_FILL_BELOW, HOLE_FIT_TOLERANCE,
-    HOLE_SCORED_MIN_CHARTS, MAX_FIT_TRIALS,
+    HOLE_FILL_BELOW, HOLE_FIT_TOLERANCE, HOLE_SCORED_MIN_CHARTS, MAX_FIT_TRIALS,
 };
 /// The largest density (within [`FIT_TOLERANCE`]) at which one page holds every chart: a
 /// search on log density: steps from the last trial's fill ratio until a density that fits and
@@ -42,23 +41,11 @@ pub(super) fn fit_to_page(
         };
     }
     let clamp_d = |d: f64| d.clamp(1e-300, 1e300);
-    // Hole filling of many charts steps up by the area its packing leaves (`FitSearch::area_steps`).
-    let area_steps = ctx.holes && ctx.order.len() >= HOLE_AREA_STEPS_MIN_CHARTS;
-    // How much the packing would have to shrink (> 1) or could grow (< 1): a packing that fits
-    // by its box's side, or with `area_steps` by its box's area (hole filling fills the page
-    // from the top, so the box's height says how much of the page is left).
+    // How much the packing would have to shrink (> 1) or could grow (< 1).
     let ratio_of = |t: &Trial| {
         if t.unplaced == 0 {
             let [x0, y0, x1, y1] = t.pages[0].bbox().unwrap_or([0, 0, 1, 1]);
-            let (fx, fy) = (
-                f64::from(x1 - x0) / f64::from(w),
-                f64::from(y1 - y0) / f64::from(h),
-            );
-            if area_steps {
-                (fx * fy).sqrt()
-            } else {
-                fx.max(fy)
-            }
+            (f64::from(x1 - x0) / f64::from(w)).max(f64::from(y1 - y0) / f64::from(h))
         } else {
             let placed = (total_area - t.unplaced_area_m2).max(total_area * 1e-6);
             (total_area / placed)
@@ -89,16 +76,13 @@ pub(super) fn fit_to_page(
     let mut search = FitSearch {
         probes: if ctx.holes { 0 } else { FIT_PROBES },
         probes_from,
-        tolerance: if area_steps {
-            HOLE_AREA_FIT_TOLERANCE
-        } else if ctx.holes {
+        tolerance: if ctx.holes {
             HOLE_FIT_TOLERANCE
         } else {
             FIT_TOLERANCE
         },
         guessed,
         floor: beat,
-        area_steps,
         ..FitSearch::default()
     };
     let mut fit: Option<Trial> = None;
@@ -187,13 +171,6 @@ pub(super) struct FitSearch {
     /// [`FitStart::Beat`]'s density just above the one to beat: no step goes below it while
     /// nothing has fitted (the caller stops when it fails).
     floor: Option<f64>,
-    /// Steps up after a fit straight to where the packing's box would fill the page (`ratio`
-    /// is the square root of the box's share of the page), less half the tolerance, and at
-    /// least `1 + tolerance · 2^(k−1)` above after `k` fits in a row (a box that already fills
-    /// the page says nothing more): hole filling of [`HOLE_AREA_STEPS_MIN_CHARTS`] charts or
-    /// more, which places each chart near the top of the page, so that the box's height tracks
-    /// the area packed.
-    area_steps: bool,
 }
 
 /// Where [`fit_to_page`] starts its search.
@@ -256,13 +233,6 @@ impl FitSearch {
         // is about linear in density), growing by at least 5%, 10%, 20%, 40% while it fits.
         Some(match (self.lo, self.hi) {
             (Some(l), Some(n)) => (l * n).sqrt(),
-            _ if fitted && self.area_steps => {
-                // Straight to where the box would fill the page (`area_steps`).
-                self.fits_in_a_row += 1;
-                let k = (self.fits_in_a_row - 1).min(4) as u32;
-                let least = 1.0 + self.tolerance * f64::from(1u32 << k);
-                (d / ratio * (1.0 - 0.5 * self.tolerance)).max(d * least)
-            }
             _ if fitted => {
                 // Consecutive fits grow by 5%, 10%, 20%, 40% (a caller's guess by 1% first).
                 self.fits_in_a_row += 1;
@@ -283,34 +253,6 @@ impl FitSearch {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Area steps: after a fit, straight to where the box would fill the page, less half the
-    /// tolerance; at least the growing least step when the box already fills it; bisection
-    /// once bracketed, as without them.
-    #[test]
-    fn area_steps_go_where_the_box_would_fill_the_page() {
-        let tol = HOLE_AREA_FIT_TOLERANCE;
-        let mut s = FitSearch {
-            tolerance: tol,
-            area_steps: true,
-            ..FitSearch::default()
-        };
-        // A fit whose box covers 81 % of the page: 1/0.9 of the density, less tol/2.
-        let n = s.next(100.0, true, 0.9).unwrap();
-        assert!((n - 100.0 / 0.9 * (1.0 - 0.5 * tol)).abs() < 1e-9, "{n}");
-        // A fit whose box fills the page: the second least step, 1 + 2·tol.
-        let m = s.next(n, true, 1.0).unwrap();
-        assert!((m - n * (1.0 + 2.0 * tol)).abs() < 1e-9, "{m}");
-        // A failure brackets: bisection on log density.
-        let b = s.next(m, false, 1.2).unwrap();
-        assert!((b - (n * m).sqrt()).abs() < 1e-9, "{b}");
-        // Without area steps the same first fit grows by the 5 % step.
-        let mut plain = FitSearch {
-            tolerance: tol,
-            ..FitSearch::default()
-        };
-        assert_eq!(plain.next(100.0, true, 0.99), Some(100.0 * 1.05));
-    }
 
     /// The probes above a closed bracket run only when the last of them would reach
     /// `probes_from`; otherwise the search ends at the bracket.

@@ -109,22 +109,6 @@ pub const FIT_TOLERANCE: f64 = 3e-3;
 /// the same packing on six more files that fill holes except spot (0.6139 → 0.6121).
 pub const HOLE_FIT_TOLERANCE: f64 = 1e-2;
 
-/// Hole filling of at least this many charts steps its density search up by the area its
-/// packing leaves empty (`fit::FitSearch::area_steps`) instead of by 1, 5, 10 %, and closes its
-/// bracket at [`HOLE_AREA_FIT_TOLERANCE`]. Trade-off: on 7 assets of 356 to 3,000 charts
-/// (2CylinderEngine and generated mixes of boxes, cylinders and rocks) the pack stage took
-/// 13-21 % less time at the same packing (sum of changes −0.003); with fewer charts the top
-/// of the search is too uneven for fewer trials (over 27 files with 20 to 3,000 charts, steps
-/// by area at 1 % lost 0.118 of packing in sum) and the packing-aware cuts (up to 256 charts)
-/// turn any change of packing into another path of cuts.
-pub const HOLE_AREA_STEPS_MIN_CHARTS: usize = 257;
-
-/// [`HOLE_FIT_TOLERANCE`] of the searches that step by area ([`HOLE_AREA_STEPS_MIN_CHARTS`]):
-/// their first steps land near the largest density that fits, so a finer bracket costs about
-/// one trial more, and at 1 % the same 7 assets lost 0.029 of packing in sum (0.006-0.007 on
-/// four of them).
-pub const HOLE_AREA_FIT_TOLERANCE: f64 = 5e-3;
-
 /// Densities tried above the bracket of [`TexelDensity::FitToPage`]: whether the charts fit is
 /// not monotone in the density (a slightly larger density can fit where a smaller did not),
 /// so after the bracket closes, `lo · (1 + k · FIT_PROBE_STEP)` for `k = 1, 2, …` up to
