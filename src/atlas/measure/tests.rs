@@ -44,6 +44,13 @@ const SQUARE: [[f64; 3]; 4] = [
 ];
 const SQUARE_TRIS: [[u32; 3]; 2] = [[0, 1, 2], [0, 2, 3]];
 
+/// Two unit squares 5 apart in x (two charts in 3-D), two faces each: positions and triangles.
+fn two_squares() -> (Vec<[f64; 3]>, [[u32; 3]; 4]) {
+    let mut pos = SQUARE.to_vec();
+    pos.extend(SQUARE.iter().map(|p| [p[0] + 5.0, p[1], p[2]]));
+    (pos, [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]])
+}
+
 /// UVs of the square's two faces under `(x, y) ↦ (ox + sx·x, oy + sy·y)`.
 fn square_uvs(o: [f32; 2], s: [f32; 2]) -> Vec<[[f32; 2]; 3]> {
     let uv = |i: usize| {
@@ -112,9 +119,7 @@ fn anisotropic_scale_has_the_analytic_stretch() {
 #[test]
 fn two_stacked_charts_overlap() {
     // Two separate squares (different positions → two charts) on the same UVs.
-    let mut pos = SQUARE.to_vec();
-    pos.extend(SQUARE.iter().map(|p| [p[0] + 5.0, p[1], p[2]]));
-    let tris = [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]];
+    let (pos, tris) = two_squares();
     let mut uvs = square_uvs([0.25, 0.25], [0.5, 0.5]);
     uvs.extend(square_uvs([0.25, 0.25], [0.5, 0.5]));
     let c = case(&pos, &tris, &uvs);
@@ -172,9 +177,7 @@ fn folded_triangle_is_flipped_and_overlaps_its_neighbour() {
 
 #[test]
 fn mirrored_chart_is_minority_not_flipped() {
-    let mut pos = SQUARE.to_vec();
-    pos.extend(SQUARE.iter().map(|p| [p[0] + 5.0, p[1], p[2]]));
-    let tris = [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]];
+    let (pos, tris) = two_squares();
     let mut uvs = square_uvs([0.0, 0.0], [0.4, 0.4]);
     // Second square mirrored in u (smaller, so it is the minority).
     uvs.extend(square_uvs([0.9, 0.5], [-0.3, 0.3]));
@@ -468,9 +471,7 @@ fn reusing_the_guards_searches_gives_the_same_report() {
     // Two squares on the same UVs (overlaps, two charts), the second cut along its diagonal
     // (a seam) and on a second page in one variant: every combination of what is reused
     // gives measure_atlas's report.
-    let mut pos = SQUARE.to_vec();
-    pos.extend(SQUARE.iter().map(|p| [p[0] + 5.0, p[1], p[2]]));
-    let tris = [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]];
+    let (pos, tris) = two_squares();
     let mut uvs = square_uvs([0.25, 0.25], [0.5, 0.5]);
     let mut second = square_uvs([0.25, 0.25], [0.5, 0.5]);
     second[1] = second[1].map(|[u, v]| [u + 0.01, v]);

@@ -117,7 +117,7 @@ pub const HOLE_FIT_TOLERANCE: f64 = 1e-2;
 /// with hole filling, nor by the horizons on [`HOLE_SCORED_MIN_CHARTS`] charts or more when
 /// even the last probe would leave them below [`HOLE_FILL_BELOW`]: hole filling then packs
 /// them again above their density, and the probes would only raise its floor (2CylinderEngine
-/// skips 6 probes, a generated asset of 356 charts 6, each a packing of every chart).
+/// skips 3 probes, a generated asset of 356 charts 6, each a packing of every chart).
 /// Trade-off: each probe is one more full packing, for about +0.01 of
 /// packing efficiency on large meshes (the armadillo's probes fitted up to +4%: 0.633 with
 /// 3 probes, 0.645 with 8); stopping at the first failure keeps the cost at one packing where
