@@ -7,7 +7,7 @@
 
 use super::error::AtlasError;
 use super::options::AtlasOptions;
-use super::pack::place::{box_waste_m2, neck_cut};
+use super::pack::place::{box_sides_m, box_waste_m2, length_pieces, neck_cut};
 use super::pack::{
     pack_charts_above, pack_charts_cached, pack_one_page, FirstPacker, PackCache, PackChart,
     PackOptions, Packing, TexelDensity,
@@ -60,6 +60,35 @@ const PACKING_CUT_MIN_GAIN: f64 = 0.02;
 /// cuts per chart; on low-poly meshes one cut, with a validation).
 const PACKING_CUT_MAX_TRIES: usize = 4;
 
+/// A chart longer than this fraction of the page's longer side, at the density where the atlas
+/// would reach the efficiency `cut_for_packing` aims at, is cut across its length into pieces
+/// no longer than that, all such charts at once (cutting one of two long rails packs no
+/// better: the other still sets the density). Trade-off: shorter pieces pack more freely and
+/// cost more seams; a strip as long as the page caps the packing however the rest is placed.
+const LONG_CUT_FRACTION: f64 = 0.7;
+/// ... and whose minimum-area rectangle is at least this many times longer than wide: a
+/// compact chart as long as that is only large (few charts share the page), and cutting it
+/// first packs worse than the cuts of the charts that waste most (fandisk: a chart of aspect
+/// 1.85 cut in two, 0.720 → 0.703; spot: one of aspect 3.17, 0.643 → 0.624). Strips of tubes,
+/// planks and rails measure 5 to 60.
+const LONG_CUT_MIN_ASPECT: f64 = 4.0;
+/// Rounds of the cuts of [`LONG_CUT_FRACTION`]: each kept round raises the density, at which
+/// more charts may be too long.
+const LONG_CUT_ROUNDS: usize = 3;
+/// At most this many pieces per chart and round ([`LONG_CUT_FRACTION`]).
+const LONG_CUT_MAX_PIECES: usize = 16;
+
+/// How `cut_for_packing` cuts a chart it picks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Way {
+    /// Across its neck ([`neck_cut`]), else across its 3-D diameter.
+    Neck,
+    /// Across its 3-D diameter (`segment::split_in_two`).
+    Diameter,
+    /// Across its length into this many pieces of equal length ([`length_pieces`]).
+    Lengthwise(usize),
+}
+
 /// Whether the packing-aware cuts apply to `mesh` with `options`: fit-to-page packing of at most
 /// [`PACKING_CUT_MAX_FACES`] faces.
 fn cuts_apply(mesh: &TriangleMesh, options: &AtlasOptions) -> bool {
@@ -85,7 +114,12 @@ pub(super) fn pack_options(mesh: &TriangleMesh, options: &AtlasOptions) -> PackO
 
 /// Packing-aware cuts (issue 21's packing target, 0.72; 0.61 on low-poly meshes): when the
 /// atlas has few charts and packs poorly (a strip, a disc or a chart with long arms wastes
-/// much of a square page), the chart that wastes the most space in its minimum-area rectangle
+/// much of a square page), first every long strip (longer than [`LONG_CUT_FRACTION`] of the
+/// page at the density of the target, and [`LONG_CUT_MIN_ASPECT`] times longer than wide: a
+/// tube, a plank, a rail) is cut across its length into pieces no longer than that, all at
+/// once ([`length_pieces`], the borders smoothed as the neck cuts' are), while
+/// that pays, up to [`LONG_CUT_ROUNDS`] rounds. Then the chart that wastes the most space in
+/// its minimum-area rectangle
 /// (`pack::place::box_waste_m2`) is cut: first across its narrowest part in UV
 /// (`pack::place::neck_cut`: the neck of a dumbbell, the root of an arm), and when that does
 /// not pay, in two from the ends of a diameter of its face graph (`segment::split_in_two`);
@@ -199,15 +233,13 @@ pub(super) fn cut_for_packing(
             _ => (goal, Some(fixed)),
         }))
     };
-    let (mut best, n, mut best_packing) = estimate(&validated, None)?;
+    let (best, n, best_packing) = estimate(&validated, None)?;
     if n == 0 || n > PACKING_CUT_MAX_CHARTS || best >= below {
         return Ok((validated, 0, best_packing));
     }
-    let mut current = validated;
-    let mut cuts = 0;
-    let mut tried: Vec<Vec<FaceId>> = Vec::new();
-    // `current` with the charts `picks` each cut in two (across the neck with `neck`, else
-    // across the 3-D diameter; then made disks), every part keeping
+    let current = validated;
+    // `current` with each chart of `picks` cut its way (in two across the neck, else across
+    // the 3-D diameter; or across its length into pieces; then made disks), every part keeping
     // its parent's map restricted to it: a cut in UV space, no flattening. Every face keeps its
     // UV shape, so flips, overlaps and each face's angle distortion are those of `current`; the
     // packer scales each part to its own 3-D area, as every chart, so a face's stretch changes
@@ -221,9 +253,8 @@ pub(super) fn cut_for_packing(
         ..options.parameterize
     };
     let cut = |current: &parameterize::ParameterizedCharts,
-               picks: &[usize],
-               flatten: bool,
-               neck: bool|
+               picks: &[(usize, Way)],
+               flatten: bool|
      -> Result<parameterize::ParameterizedCharts, AtlasError> {
         let charts = &current.segmentation.charts;
         let mut stats = current.segmentation.stats;
@@ -231,12 +262,40 @@ pub(super) fn cut_for_packing(
         for (i, faces) in charts.iter().enumerate() {
             let parent = current.maps[i].as_ref();
             let unresolved = current.unresolved.iter().any(|(c, _)| *c == i);
-            if !picks.contains(&i) || parent.is_none() || unresolved {
+            let way = picks
+                .iter()
+                .find(|(c, _)| *c == i)
+                .map(|&(_, w)| w)
+                .filter(|_| parent.is_some() && !unresolved);
+            let Some(way) = way else {
                 parts.push((faces.clone(), parent.cloned()));
+                continue;
+            };
+            let pieces = match way {
+                Way::Lengthwise(k) => parent.and_then(|(map, _)| {
+                    let (cm, _) = parameterize::chart_mesh(mesh, faces);
+                    let piece = length_pieces(
+                        &PackChart {
+                            uv: &map.uv,
+                            triangles: &cm.triangles,
+                            area_m2: 0.0,
+                        },
+                        k,
+                    )?;
+                    Some(cut_pieces(mesh, faces, &piece))
+                }),
+                _ => None,
+            };
+            if let Some(pieces) = pieces {
+                for mut part in segment::enforce_disks(mesh, pieces, &mut stats) {
+                    part.sort_unstable();
+                    let map = parent.and_then(|p| parameterize::restricted_map(mesh, &part, p));
+                    parts.push((part, map));
+                }
                 continue;
             }
             let inside = |f: FaceId| faces.binary_search(&f).is_ok();
-            let by_neck = if neck {
+            let by_neck = if way == Way::Neck {
                 parent.and_then(|(map, _)| {
                     let (cm, _) = parameterize::chart_mesh(mesh, faces);
                     let side = neck_cut(&PackChart {
@@ -309,35 +368,112 @@ pub(super) fn cut_for_packing(
             })
             .collect())
     };
-    let mut waste = wastes(&current)?;
-    for _ in 0..PACKING_CUT_MAX_TRIES {
-        if best >= below {
-            break;
-        }
-        // The chart of at least 2 faces not tried yet that wastes the most space.
-        let charts = &current.segmentation.charts;
-        let Some(pick) = (0..charts.len())
-            .filter(|&i| charts[i].len() >= 2 && !tried.contains(&charts[i]))
-            .max_by(|&a, &b| waste[a].total_cmp(&waste[b]).then(b.cmp(&a)))
-        else {
-            break;
-        };
-        tried.push(charts[pick].clone());
-        // Across the chart's neck first (kept maps), then across its 3-D diameter.
-        let ways: &[bool] = if low_poly { &[false] } else { &[true, false] };
-        for &neck in ways {
-            let candidate = cut(&current, &[pick], low_poly, neck)?;
-            if let Some((eff, packing)) = try_candidate(&candidate, best)? {
-                best = eff;
-                best_packing = packing;
-                cuts += candidate.segmentation.charts.len() - current.segmentation.charts.len();
-                current = candidate;
-                waste = wastes(&current)?;
-                tried.clear();
+    // The cuts that pay, one chart at a time, the chart wasting most first (`PACKING_CUT_MAX_TRIES`
+    // tries).
+    let waste_cuts = |mut state: CutState| -> Result<CutState, AtlasError> {
+        let mut tried: Vec<Vec<FaceId>> = Vec::new();
+        let mut waste = wastes(&state.current)?;
+        for _ in 0..PACKING_CUT_MAX_TRIES {
+            if state.best >= below {
                 break;
             }
+            // The chart of at least 2 faces not tried yet that wastes the most space.
+            let charts = &state.current.segmentation.charts;
+            let Some(pick) = (0..charts.len())
+                .filter(|&i| charts[i].len() >= 2 && !tried.contains(&charts[i]))
+                .max_by(|&a, &b| waste[a].total_cmp(&waste[b]).then(b.cmp(&a)))
+            else {
+                break;
+            };
+            tried.push(charts[pick].clone());
+            // Across the chart's neck first (kept maps), then across its 3-D diameter.
+            let ways: &[Way] = if low_poly {
+                &[Way::Diameter]
+            } else {
+                &[Way::Neck, Way::Diameter]
+            };
+            for &way in ways {
+                let candidate = cut(&state.current, &[(pick, way)], low_poly)?;
+                if let Some((eff, packing)) = try_candidate(&candidate, state.best)? {
+                    state.kept(candidate, eff, packing);
+                    waste = wastes(&state.current)?;
+                    tried.clear();
+                    break;
+                }
+            }
         }
-    }
+        Ok(state)
+    };
+    // The charts of `v` too long for the page at the density of the target efficiency
+    // (`LONG_CUT_FRACTION`, `LONG_CUT_MIN_ASPECT`), each with the pieces to cut it into.
+    let side_texels = f64::from(options.pack.width_texels.max(options.pack.height_texels));
+    let limit_texels = LONG_CUT_FRACTION * side_texels;
+    let long_charts =
+        |v: &parameterize::ParameterizedCharts| -> Result<Vec<(usize, Way)>, AtlasError> {
+            let inputs = pack_inputs(mesh, v)?;
+            let (packed, total) = packed_of(&inputs);
+            let goal_texels_per_unit = (below * page / total).sqrt();
+            if !goal_texels_per_unit.is_finite() {
+                return Ok(Vec::new());
+            }
+            Ok(packed
+                .iter()
+                .filter_map(|&i| {
+                    let (map, _) = v.maps[i].as_ref()?;
+                    let [long_m, short_m] = box_sides_m(&PackChart {
+                        uv: &map.uv,
+                        triangles: &inputs.triangles[i],
+                        area_m2: inputs.area_m2[i],
+                    });
+                    let pieces = (goal_texels_per_unit * long_m / limit_texels).ceil();
+                    (v.segmentation.charts[i].len() >= 2
+                        && pieces >= 2.0
+                        && long_m >= LONG_CUT_MIN_ASPECT * short_m)
+                        .then(|| {
+                            (
+                                i,
+                                Way::Lengthwise((pieces as usize).min(LONG_CUT_MAX_PIECES)),
+                            )
+                        })
+                })
+                .collect())
+        };
+    // Every chart too long cut across its length at once, while that pays (`LONG_CUT_ROUNDS`).
+    let long_cuts = |mut state: CutState| -> Result<CutState, AtlasError> {
+        for _ in 0..LONG_CUT_ROUNDS {
+            if state.best >= below {
+                break;
+            }
+            let picks = long_charts(&state.current)?;
+            if picks.is_empty() {
+                break;
+            }
+            let candidate = cut(&state.current, &picks, low_poly)?;
+            if candidate.segmentation.charts.len() == state.current.segmentation.charts.len() {
+                break;
+            }
+            let Some((eff, packing)) = try_candidate(&candidate, state.best)? else {
+                break;
+            };
+            state.kept(candidate, eff, packing);
+        }
+        Ok(state)
+    };
+    // The long charts first: cut by waste first, their pieces get other shapes and the long
+    // cuts after them find less (a 66-chart asset with two 30 m rails: 0.715 the long cuts
+    // first, 0.635 after; a tube of 8 sides and 15 m, 0.742 against 0.673).
+    let start = CutState {
+        current,
+        best,
+        best_packing,
+        cuts: 0,
+    };
+    let CutState {
+        mut current,
+        best,
+        mut best_packing,
+        mut cuts,
+    } = waste_cuts(long_cuts(start)?)?;
     // No single cut paid (e.g. a tube in four equal strips, where cutting one strip leaves an
     // irregular set): the last tries cut every chart of at least 2 faces at once, and when that
     // does not pay either, every piece once more, up to `PACKING_CUT_ALL_LEVELS` levels (a 2:1
@@ -356,7 +492,8 @@ pub(super) fn cut_for_packing(
             if picks.is_empty() {
                 break;
             }
-            let candidate = cut(base, &picks, true, false)?;
+            let picks: Vec<(usize, Way)> = picks.into_iter().map(|i| (i, Way::Diameter)).collect();
+            let candidate = cut(base, &picks, true)?;
             let cut_now = cut_before + picks.len();
             if let Some((_, packing)) = try_candidate(&candidate, best)? {
                 cuts = cut_now;
@@ -368,4 +505,56 @@ pub(super) fn cut_for_packing(
         }
     }
     Ok((current, cuts, best_packing))
+}
+
+/// `faces` (a chart) cut into the pieces `piece` numbers (one per face, in the order of
+/// `faces`, numbered from 0 without gaps): the first piece cut off the rest, then the next,
+/// each border smoothed as `segment::smooth_cut` smooths it. Every face lands in one part; a
+/// part may be empty or not connected (the caller makes disks).
+fn cut_pieces(mesh: &TriangleMesh, faces: &[FaceId], piece: &[usize]) -> Vec<Vec<FaceId>> {
+    let mut of: Vec<(FaceId, usize)> = faces.iter().copied().zip(piece.iter().copied()).collect();
+    of.sort_unstable_by_key(|&(f, _)| f);
+    let piece_of = |f: FaceId| {
+        of.binary_search_by_key(&f, |&(g, _)| g)
+            .map_or(0, |k| of[k].1)
+    };
+    let count = piece.iter().max().map_or(1, |&m| m + 1);
+    let mut parts = Vec::new();
+    let mut rest = faces.to_vec();
+    for j in 1..count {
+        if rest.is_empty() {
+            break;
+        }
+        let far: Vec<bool> = rest.iter().map(|&f| piece_of(f) >= j).collect();
+        let (near, beyond) = segment::smooth_cut(mesh, &rest, &far);
+        parts.push(near);
+        rest = beyond;
+    }
+    parts.push(rest);
+    parts
+}
+
+/// Where `cut_for_packing` stands: the charts, the estimated efficiency of their packing and
+/// that packing, and the charts its kept cuts added.
+#[derive(Debug, Clone)]
+struct CutState {
+    current: parameterize::ParameterizedCharts,
+    best: f64,
+    best_packing: Option<Packing>,
+    cuts: usize,
+}
+
+impl CutState {
+    /// Keeps `candidate`, whose packing `packing` reached efficiency `eff`.
+    fn kept(
+        &mut self,
+        candidate: parameterize::ParameterizedCharts,
+        eff: f64,
+        packing: Option<Packing>,
+    ) {
+        self.cuts += candidate.segmentation.charts.len() - self.current.segmentation.charts.len();
+        self.best = eff;
+        self.best_packing = packing;
+        self.current = candidate;
+    }
 }

@@ -135,6 +135,43 @@ pub fn neck_cut(chart: &PackChart<'_>) -> Option<Vec<bool>> {
         let [a, b, c] = t.map(|i| chart.uv[i as usize]);
         0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs()
     };
+    let LongAxis { s, lo, len } = long_axis(chart)?;
+    let mut slices = vec![0.0; NECK_SLICES];
+    for (t, &x) in chart.triangles.iter().zip(&s) {
+        let k = (((x - lo) / len) * NECK_SLICES as f64).floor();
+        slices[(k.max(0.0) as usize).min(NECK_SLICES - 1)] += area(t);
+    }
+    let margin = ((1.0 - NECK_MIDDLE) / 2.0 * NECK_SLICES as f64).round() as usize;
+    let middle = NECK_SLICES as f64 / 2.0;
+    let k = (margin..NECK_SLICES - margin).min_by(|&a, &b| {
+        slices[a].total_cmp(&slices[b]).then(
+            (a as f64 + 0.5 - middle)
+                .abs()
+                .total_cmp(&(b as f64 + 0.5 - middle).abs()),
+        )
+    })?;
+    let cut = lo + len * (k as f64 + 0.5) / NECK_SLICES as f64;
+    let side: Vec<bool> = s.iter().map(|&x| x > cut).collect();
+    (side.iter().any(|&v| v) && side.iter().any(|&v| !v)).then_some(side)
+}
+
+/// Slices of [`neck_cut`] along the chart's long side.
+pub const NECK_SLICES: usize = 32;
+/// The share of the long side, centred, in which [`neck_cut`] looks for the neck: cuts nearer
+/// an end only trim a tip.
+pub const NECK_MIDDLE: f64 = 0.7;
+
+/// Where each triangle of a chart lies along the long side of the chart's minimum-area
+/// rectangle: its centroid's coordinate `s[t]` along that side, the least coordinate `lo` of
+/// any corner, and the side's length `len` (UV units, finite and positive).
+struct LongAxis {
+    s: Vec<f64>,
+    lo: f64,
+    len: f64,
+}
+
+/// [`LongAxis`] of `chart`, or `None` for a non-finite UV or a chart without UV extent.
+fn long_axis(chart: &PackChart<'_>) -> Option<LongAxis> {
     let points: Vec<[f64; 2]> = chart
         .triangles
         .iter()
@@ -168,33 +205,62 @@ pub fn neck_cut(chart: &PackChart<'_>) -> Option<Vec<bool>> {
         .map(|p| p[0] * axis[0] + p[1] * axis[1])
         .fold(f64::INFINITY, f64::min);
     let len = b.along.max(b.across);
-    if !(len > 0.0 && len.is_finite()) {
-        return None;
-    }
-    let mut slices = vec![0.0; NECK_SLICES];
-    for (t, &x) in chart.triangles.iter().zip(&s) {
-        let k = (((x - lo) / len) * NECK_SLICES as f64).floor();
-        slices[(k.max(0.0) as usize).min(NECK_SLICES - 1)] += area(t);
-    }
-    let margin = ((1.0 - NECK_MIDDLE) / 2.0 * NECK_SLICES as f64).round() as usize;
-    let middle = NECK_SLICES as f64 / 2.0;
-    let k = (margin..NECK_SLICES - margin).min_by(|&a, &b| {
-        slices[a].total_cmp(&slices[b]).then(
-            (a as f64 + 0.5 - middle)
-                .abs()
-                .total_cmp(&(b as f64 + 0.5 - middle).abs()),
-        )
-    })?;
-    let cut = lo + len * (k as f64 + 0.5) / NECK_SLICES as f64;
-    let side: Vec<bool> = s.iter().map(|&x| x > cut).collect();
-    (side.iter().any(|&v| v) && side.iter().any(|&v| !v)).then_some(side)
+    (len > 0.0 && len.is_finite()).then_some(LongAxis { s, lo, len })
 }
 
-/// Slices of [`neck_cut`] along the chart's long side.
-pub const NECK_SLICES: usize = 32;
-/// The share of the long side, centred, in which [`neck_cut`] looks for the neck: cuts nearer
-/// an end only trim a tip.
-pub const NECK_MIDDLE: f64 = 0.7;
+/// The long and the short side of a chart's minimum-area enclosing rectangle at its packing
+/// scale (UV area = 3-D area, as [`PreparedChart::unit_scale`] scales it), model units: at
+/// `texels_per_unit`, the chart is `long × texels_per_unit` texels long. `[0, 0]` for a chart
+/// without UV area or with a non-finite UV.
+pub fn box_sides_m(chart: &PackChart<'_>) -> [f64; 2] {
+    let Ok(prep) = prepare_chart(0, chart) else {
+        return [0.0; 2];
+    };
+    if prep.unit_scale <= 0.0 {
+        return [0.0; 2];
+    }
+    let points: Vec<[f64; 2]> = chart
+        .triangles
+        .iter()
+        .flatten()
+        .map(|&i| chart.uv[i as usize])
+        .collect();
+    match min_area_box(&convex_hull(&points)) {
+        Some(b) => [
+            b.along.max(b.across) * prep.unit_scale,
+            b.along.min(b.across) * prep.unit_scale,
+        ],
+        None => [0.0; 2],
+    }
+}
+
+/// A cut of a chart into `pieces` slices of equal length along the long side of its
+/// minimum-area rectangle: `Some(piece)` with `piece[t]` the slice of triangle `t`'s centroid,
+/// numbered from 0 along the side without gaps (a slice that holds no centroid, between long
+/// triangles, gets no number). `None` when `pieces < 2`, the chart has no UV extent or a
+/// non-finite UV, or every centroid falls in one slice. The pieces need not be connected: the
+/// caller makes disks of them.
+pub fn length_pieces(chart: &PackChart<'_>, pieces: usize) -> Option<Vec<usize>> {
+    if pieces < 2 {
+        return None;
+    }
+    let LongAxis { s, lo, len } = long_axis(chart)?;
+    let slice: Vec<usize> = s
+        .iter()
+        .map(|&x| ((((x - lo) / len) * pieces as f64).floor().max(0.0) as usize).min(pieces - 1))
+        .collect();
+    let mut used = vec![false; pieces];
+    for &k in &slice {
+        used[k] = true;
+    }
+    let mut number = vec![0usize; pieces];
+    let mut next = 0;
+    for k in 0..pieces {
+        number[k] = next;
+        next += usize::from(used[k]);
+    }
+    (next >= 2).then(|| slice.iter().map(|&k| number[k]).collect())
+}
 
 /// Validates a chart and computes its density-independent data.
 ///

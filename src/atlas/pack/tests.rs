@@ -769,6 +769,61 @@ fn box_waste_is_the_empty_part_of_the_minimum_area_rectangle() {
 }
 
 #[test]
+fn box_sides_are_the_minimum_area_rectangle_at_the_packing_scale() {
+    // A 32 × 2 strip turned by 0.5 rad, with 3-D area 16 (a quarter of its UV area 64): at the
+    // packing scale (UV area = 3-D area) its sides are halved, 16 × 1, whatever the turn.
+    let mut turned = strip(32.0, 2.0, 16, 0.0);
+    let (s, c) = 0.5f64.sin_cos();
+    for p in &mut turned.uv {
+        *p = [c * p[0] - s * p[1], s * p[0] + c * p[1]];
+    }
+    turned.area_m2 = 16.0;
+    let [long, short] = place::box_sides_m(&turned.as_pack_chart());
+    assert!(
+        (long - 16.0).abs() < 1e-9 && (short - 1.0).abs() < 1e-9,
+        "{long} × {short}"
+    );
+    // No UV area: no sides.
+    let flat = OwnedChart {
+        uv: vec![[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]],
+        triangles: vec![[0, 1, 2]],
+        area_m2: 1.0,
+    };
+    assert_eq!(place::box_sides_m(&flat.as_pack_chart()), [0.0, 0.0]);
+}
+
+#[test]
+fn length_pieces_slice_a_strip_into_equal_lengths() {
+    // A 12 × 1 strip of 12 quads along x: 3 pieces of 4 quads (8 triangles) each, numbered
+    // along the strip, whichever end the long axis starts from.
+    let long = strip(12.0, 1.0, 12, 0.0);
+    let piece = place::length_pieces(&long.as_pack_chart(), 3).expect("pieces");
+    assert_eq!(piece.len(), 24);
+    for k in 0..3 {
+        assert_eq!(piece.iter().filter(|&&p| p == k).count(), 8, "{piece:?}");
+    }
+    // Neighbouring quads share a piece or follow each other, so each piece is one run.
+    let per_quad: Vec<usize> = piece.chunks(2).map(|q| q[0]).collect();
+    assert!(piece.chunks(2).all(|q| q[0] == q[1]), "{piece:?}");
+    assert!(
+        per_quad.windows(2).all(|w| w[0].abs_diff(w[1]) <= 1),
+        "{per_quad:?}"
+    );
+    // Slices that hold no centroid get no number: the 6 triangles of 3 long quads (9 × 1, their
+    // centroids at x = 1, 2, 4, 5, 7, 8) in 8 slices of 9/8 fall in slices 0, 1, 3, 4, 6 and 7,
+    // numbered 0 to 5 in order.
+    let coarse = strip(9.0, 1.0, 3, 0.0);
+    let piece = place::length_pieces(&coarse.as_pack_chart(), 8).expect("pieces");
+    let mut sorted = piece.clone();
+    sorted.sort_unstable();
+    assert_eq!(sorted, vec![0, 1, 2, 3, 4, 5], "{piece:?}");
+    // Fewer than 2 pieces, or one slice holding every centroid: no cut.
+    assert!(place::length_pieces(&long.as_pack_chart(), 1).is_none());
+    let one = triangle([[0.0, 0.0], [10.0, 0.0], [0.0, 1.0]]);
+    assert!(place::length_pieces(&one.as_pack_chart(), 4).is_none());
+}
+
+#[test]
 fn a_dumbbell_is_cut_across_its_bar() {
     // Two 4 × 4 squares joined by a 4 × 0.5 bar along x (length 12): the neck is in the bar,
     // so one side holds the left square's triangles and the other the right square's.
