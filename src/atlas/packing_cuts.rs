@@ -2,7 +2,8 @@
 //!
 //! It runs at the start of the pack stage (its packing is the stage's packing when no cut is
 //! kept), without a cancel checkpoint of its own: it is bounded to a few packings (and on
-//! low-poly meshes validations) of a mesh of at most [`PACKING_CUT_MAX_FACES`] faces.
+//! low-poly meshes validations) of a mesh of at most [`PACKING_CUT_MAX_FACES`] faces, or of
+//! at most [`LONG_CUT_MAX_FACES`] with a long strip (the long cuts alone).
 //! Deterministic.
 
 use super::error::AtlasError;
@@ -75,6 +76,12 @@ const LONG_CUT_MIN_ASPECT: f64 = 4.0;
 /// Rounds of the cuts of [`LONG_CUT_FRACTION`]: each kept round raises the density, at which
 /// more charts may be too long.
 const LONG_CUT_ROUNDS: usize = 3;
+/// The long cuts also run on meshes above [`PACKING_CUT_MAX_FACES`] faces, up to this many
+/// (alone: no cut by waste, no last resort), when a chart is that long: a strip caps the
+/// packing of any mesh (a tube of 22k triangles packed at 0.126). Trade-off: finding the long
+/// charts costs every chart's minimum-area rectangle (6 ms on the bunny's 69k faces, 0.113 → 0.119 s);
+/// only a mesh that has one pays a packing more per round.
+const LONG_CUT_MAX_FACES: usize = 200_000;
 /// At most this many pieces per chart and round ([`LONG_CUT_FRACTION`]).
 const LONG_CUT_MAX_PIECES: usize = 16;
 
@@ -144,7 +151,12 @@ pub(super) fn cut_for_packing(
     validated: parameterize::ParameterizedCharts,
     options: &AtlasOptions,
 ) -> Result<(parameterize::ParameterizedCharts, usize, Option<Packing>), AtlasError> {
-    if !cuts_apply(mesh, options) {
+    // Above PACKING_CUT_MAX_FACES faces only the long cuts run, up to LONG_CUT_MAX_FACES.
+    let long_only = !cuts_apply(mesh, options);
+    if long_only
+        && !(options.pack.density == TexelDensity::FitToPage
+            && mesh.num_faces() <= LONG_CUT_MAX_FACES)
+    {
         return Ok((validated, 0, None));
     }
     let pack_options = pack_options(mesh, options);
@@ -233,6 +245,44 @@ pub(super) fn cut_for_packing(
             _ => (goal, Some(fixed)),
         }))
     };
+    // The charts of `v` too long for the page at the density of the target efficiency
+    // (`LONG_CUT_FRACTION`, `LONG_CUT_MIN_ASPECT`), each with the pieces to cut it into.
+    let side_texels = f64::from(options.pack.width_texels.max(options.pack.height_texels));
+    let limit_texels = LONG_CUT_FRACTION * side_texels;
+    let long_charts =
+        |v: &parameterize::ParameterizedCharts| -> Result<Vec<(usize, Way)>, AtlasError> {
+            let inputs = pack_inputs(mesh, v)?;
+            let (packed, total) = packed_of(&inputs);
+            let goal_texels_per_unit = (below * page / total).sqrt();
+            if !goal_texels_per_unit.is_finite() {
+                return Ok(Vec::new());
+            }
+            Ok(packed
+                .iter()
+                .filter_map(|&i| {
+                    let (map, _) = v.maps[i].as_ref()?;
+                    let [long_m, short_m] = box_sides_m(&PackChart {
+                        uv: &map.uv,
+                        triangles: &inputs.triangles[i],
+                        area_m2: inputs.area_m2[i],
+                    });
+                    let pieces = (goal_texels_per_unit * long_m / limit_texels).ceil();
+                    (v.segmentation.charts[i].len() >= 2
+                        && pieces >= 2.0
+                        && long_m >= LONG_CUT_MIN_ASPECT * short_m)
+                        .then(|| {
+                            (
+                                i,
+                                Way::Lengthwise((pieces as usize).min(LONG_CUT_MAX_PIECES)),
+                            )
+                        })
+                })
+                .collect())
+        };
+    // A large mesh without a long chart is packed by the pack stage alone.
+    if long_only && long_charts(&validated)?.is_empty() {
+        return Ok((validated, 0, None));
+    }
     let (best, n, best_packing) = estimate(&validated, None)?;
     if n == 0 || n > PACKING_CUT_MAX_CHARTS || best >= below {
         return Ok((validated, 0, best_packing));
@@ -404,40 +454,6 @@ pub(super) fn cut_for_packing(
         }
         Ok(state)
     };
-    // The charts of `v` too long for the page at the density of the target efficiency
-    // (`LONG_CUT_FRACTION`, `LONG_CUT_MIN_ASPECT`), each with the pieces to cut it into.
-    let side_texels = f64::from(options.pack.width_texels.max(options.pack.height_texels));
-    let limit_texels = LONG_CUT_FRACTION * side_texels;
-    let long_charts =
-        |v: &parameterize::ParameterizedCharts| -> Result<Vec<(usize, Way)>, AtlasError> {
-            let inputs = pack_inputs(mesh, v)?;
-            let (packed, total) = packed_of(&inputs);
-            let goal_texels_per_unit = (below * page / total).sqrt();
-            if !goal_texels_per_unit.is_finite() {
-                return Ok(Vec::new());
-            }
-            Ok(packed
-                .iter()
-                .filter_map(|&i| {
-                    let (map, _) = v.maps[i].as_ref()?;
-                    let [long_m, short_m] = box_sides_m(&PackChart {
-                        uv: &map.uv,
-                        triangles: &inputs.triangles[i],
-                        area_m2: inputs.area_m2[i],
-                    });
-                    let pieces = (goal_texels_per_unit * long_m / limit_texels).ceil();
-                    (v.segmentation.charts[i].len() >= 2
-                        && pieces >= 2.0
-                        && long_m >= LONG_CUT_MIN_ASPECT * short_m)
-                        .then(|| {
-                            (
-                                i,
-                                Way::Lengthwise((pieces as usize).min(LONG_CUT_MAX_PIECES)),
-                            )
-                        })
-                })
-                .collect())
-        };
     // Every chart too long cut across its length at once, while that pays (`LONG_CUT_ROUNDS`).
     let long_cuts = |mut state: CutState| -> Result<CutState, AtlasError> {
         for _ in 0..LONG_CUT_ROUNDS {
@@ -473,12 +489,16 @@ pub(super) fn cut_for_packing(
         best,
         mut best_packing,
         mut cuts,
-    } = waste_cuts(long_cuts(start)?)?;
+    } = if long_only {
+        long_cuts(start)?
+    } else {
+        waste_cuts(long_cuts(start)?)?
+    };
     // No single cut paid (e.g. a tube in four equal strips, where cutting one strip leaves an
     // irregular set): the last tries cut every chart of at least 2 faces at once, and when that
     // does not pay either, every piece once more, up to `PACKING_CUT_ALL_LEVELS` levels (a 2:1
     // rectangle cut into two squares packs no better on a square page; its quarters do).
-    if cuts == 0 && best < below && n <= PACKING_CUT_ALL_MAX_CHARTS {
+    if !long_only && cuts == 0 && best < below && n <= PACKING_CUT_ALL_MAX_CHARTS {
         let mut level: Option<(parameterize::ParameterizedCharts, usize)> = None;
         for _ in 0..PACKING_CUT_ALL_LEVELS {
             let (base, cut_before) = match &level {

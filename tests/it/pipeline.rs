@@ -299,6 +299,27 @@ fn long_tubes_are_cut_across_their_length() {
     assert_eq!(atlas.report.overlap.exact.pairs, 0);
 }
 
+/// The long cuts also run above the 20k faces of the other packing-aware cuts: one open tube of
+/// 22,400 triangles (15 m, radius 0.3 m), flattened into 8 strips of aspect 60, packs at 0.53
+/// with them cut across their length (19 charts). Without these cuts nothing is cut above 20k
+/// faces: a capped tube of the same size packed at 0.126 as one strip.
+#[test]
+fn a_long_tube_of_many_faces_is_cut_across_its_length() {
+    let mesh = TriangleMesh::build(&fixtures::cylinder_open(16, 700, 0.3, 15.0))
+        .expect("builds")
+        .mesh;
+    assert!(mesh.num_faces() > 20_000);
+    let atlas = generate(&mesh, &AtlasOptions::default(), &mut NoProgress).expect("atlas");
+    assert!(atlas.stats.packing_cuts >= 2, "{:?}", atlas.stats);
+    assert!(
+        atlas.report.packing_efficiency > 0.4,
+        "the tube should be cut: packing {}",
+        atlas.report.packing_efficiency
+    );
+    assert_eq!(atlas.report.flipped, 0);
+    assert_eq!(atlas.report.overlap.exact.pairs, 0);
+}
+
 /// ASP (`--parameterization asp`): every fixture still gets a valid atlas (no flip, no overlap
 /// in the report), the pipeline says which parameterization ran, the result is the same bits on
 /// one thread and on four, and on a curved mesh the area distortion falls below LSCM's.

@@ -213,23 +213,33 @@ fn long_axis(chart: &PackChart<'_>) -> Option<LongAxis> {
 /// `texels_per_unit`, the chart is `long × texels_per_unit` texels long. `[0, 0]` for a chart
 /// without UV area or with a non-finite UV.
 pub fn box_sides_m(chart: &PackChart<'_>) -> [f64; 2] {
-    let Ok(prep) = prepare_chart(0, chart) else {
-        return [0.0; 2];
-    };
-    if prep.unit_scale <= 0.0 {
+    // The referenced vertices only (each once), without the rest of `prepare_chart`: the
+    // caller asks this of every chart of meshes up to hundreds of thousands of faces.
+    let mut referenced = vec![false; chart.uv.len()];
+    let mut uv_area = 0.0;
+    for t in chart.triangles {
+        let corner = |k: usize| chart.uv.get(t[k] as usize).copied();
+        let (Some(a), Some(b), Some(c)) = (corner(0), corner(1), corner(2)) else {
+            return [0.0; 2];
+        };
+        for &i in t {
+            referenced[i as usize] = true;
+        }
+        uv_area += 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs();
+    }
+    let scale = (chart.area_m2 / uv_area).sqrt();
+    if !(scale.is_finite() && scale > 0.0) {
         return [0.0; 2];
     }
     let points: Vec<[f64; 2]> = chart
-        .triangles
+        .uv
         .iter()
-        .flatten()
-        .map(|&i| chart.uv[i as usize])
+        .zip(&referenced)
+        .filter(|&(p, &r)| r && p[0].is_finite() && p[1].is_finite())
+        .map(|(p, _)| *p)
         .collect();
     match min_area_box(&convex_hull(&points)) {
-        Some(b) => [
-            b.along.max(b.across) * prep.unit_scale,
-            b.along.min(b.across) * prep.unit_scale,
-        ],
+        Some(b) => [b.along.max(b.across) * scale, b.along.min(b.across) * scale],
         None => [0.0; 2],
     }
 }
