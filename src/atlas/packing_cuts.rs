@@ -143,7 +143,9 @@ pub(super) fn pack_options(mesh: &TriangleMesh, options: &AtlasOptions) -> PackO
 /// to [`PACKING_CUT_MAX_TRIES`] charts; when no single cut paid and there are at most
 /// [`PACKING_CUT_ALL_MAX_CHARTS`] charts, every chart is cut at once and validated again
 /// (then every piece again, up to [`PACKING_CUT_ALL_LEVELS`] levels), the last tries. Only
-/// with [`TexelDensity::FitToPage`] (an explicit density does not change with the cut).
+/// with [`TexelDensity::FitToPage`] (an explicit density does not change with the cut). On
+/// meshes above [`PACKING_CUT_MAX_FACES`] faces, up to [`LONG_CUT_MAX_FACES`], only the long
+/// cuts run, and only when a chart is that long (else nothing is packed here).
 /// Deterministic (every step is). Returns the charts to use, the number of charts the cuts
 /// added and the packing of those charts.
 pub(super) fn cut_for_packing(

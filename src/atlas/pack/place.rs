@@ -211,7 +211,7 @@ fn long_axis(chart: &PackChart<'_>) -> Option<LongAxis> {
 /// The long and the short side of a chart's minimum-area enclosing rectangle at its packing
 /// scale (UV area = 3-D area, as [`PreparedChart::unit_scale`] scales it), model units: at
 /// `texels_per_unit`, the chart is `long × texels_per_unit` texels long. `[0, 0]` for a chart
-/// without UV area or with a non-finite UV.
+/// without UV area, with a non-finite UV or with a triangle index out of range.
 pub fn box_sides_m(chart: &PackChart<'_>) -> [f64; 2] {
     // The referenced vertices only (each once), without the rest of `prepare_chart`: the
     // caller asks this of every chart of meshes up to hundreds of thousands of faces.
@@ -235,7 +235,7 @@ pub fn box_sides_m(chart: &PackChart<'_>) -> [f64; 2] {
         .uv
         .iter()
         .zip(&referenced)
-        .filter(|&(p, &r)| r && p[0].is_finite() && p[1].is_finite())
+        .filter(|&(_, &r)| r)
         .map(|(p, _)| *p)
         .collect();
     match min_area_box(&convex_hull(&points)) {
