@@ -323,50 +323,47 @@ pub(super) fn cut_for_packing(
                 parts.push((faces.clone(), parent.cloned()));
                 continue;
             };
-            let pieces = match way {
-                Way::Lengthwise(k) => parent.and_then(|(map, _)| {
-                    let (cm, _) = parameterize::chart_mesh(mesh, faces);
-                    let piece = length_pieces(
-                        &PackChart {
+            let pieces: Vec<Vec<FaceId>> = match way {
+                Way::Lengthwise(k) => {
+                    let sliced = parent.and_then(|(map, _)| {
+                        let (cm, _) = parameterize::chart_mesh(mesh, faces);
+                        let chart = PackChart {
                             uv: &map.uv,
                             triangles: &cm.triangles,
                             area_m2: 0.0,
-                        },
-                        k,
-                    )?;
-                    Some(cut_pieces(mesh, faces, &piece))
-                }),
-                _ => None,
-            };
-            if let Some(pieces) = pieces {
-                for mut part in segment::enforce_disks(mesh, pieces, &mut stats) {
-                    part.sort_unstable();
-                    let map = parent.and_then(|p| parameterize::restricted_map(mesh, &part, p));
-                    parts.push((part, map));
+                        };
+                        length_pieces(&chart, k).map(|piece| cut_pieces(mesh, faces, &piece))
+                    });
+                    let Some(pieces) = sliced else {
+                        // Every centroid in one slice: the chart stays whole.
+                        parts.push((faces.clone(), parent.cloned()));
+                        continue;
+                    };
+                    pieces
                 }
-                continue;
-            }
-            let inside = |f: FaceId| faces.binary_search(&f).is_ok();
-            let by_neck = if way == Way::Neck {
-                parent.and_then(|(map, _)| {
-                    let (cm, _) = parameterize::chart_mesh(mesh, faces);
-                    let side = neck_cut(&PackChart {
-                        uv: &map.uv,
-                        triangles: &cm.triangles,
-                        area_m2: 0.0,
-                    })?;
-                    // The cut follows triangle edges across the neck: its teeth go to the
-                    // other side, as on the borders the segmentation grows.
-                    Some(segment::smooth_cut(mesh, faces, &side))
-                })
-            } else {
-                None
+                Way::Neck | Way::Diameter => {
+                    let by_neck = if way == Way::Neck {
+                        parent.and_then(|(map, _)| {
+                            let (cm, _) = parameterize::chart_mesh(mesh, faces);
+                            let side = neck_cut(&PackChart {
+                                uv: &map.uv,
+                                triangles: &cm.triangles,
+                                area_m2: 0.0,
+                            })?;
+                            // The cut follows triangle edges across the neck: its teeth go to
+                            // the other side, as on the borders the segmentation grows.
+                            Some(segment::smooth_cut(mesh, faces, &side))
+                        })
+                    } else {
+                        None
+                    };
+                    let inside = |f: FaceId| faces.binary_search(&f).is_ok();
+                    let (a, b) =
+                        by_neck.unwrap_or_else(|| segment::split_in_two(mesh, faces, &inside));
+                    vec![a, b]
+                }
             };
-            let (a, b) = match by_neck {
-                Some(ab) => ab,
-                None => segment::split_in_two(mesh, faces, &inside),
-            };
-            for mut part in segment::enforce_disks(mesh, vec![a, b], &mut stats) {
+            for mut part in segment::enforce_disks(mesh, pieces, &mut stats) {
                 part.sort_unstable();
                 let map = parent.and_then(|p| parameterize::restricted_map(mesh, &part, p));
                 parts.push((part, map));
