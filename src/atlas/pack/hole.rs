@@ -256,6 +256,14 @@ pub struct Occupancy {
 struct Scan {
     /// The chart's runs `(row, first, last)`, in the order they are tested.
     rows: Vec<(i32, i32, i32)>,
+    /// The row filter of [`Occupancy::scan_rows`]: each chart row once, with the length of its
+    /// longest run, in the order of `rows` (the key run's row first).
+    filter: Vec<(i32, i32)>,
+    /// The length of the longest run of each chart row (0 for a row without runs).
+    longest: Vec<i32>,
+    /// The box row (from the box's top) whose longest free run last rejected a canvas row, or
+    /// -1: the next canvas rows test it first.
+    blocked: i32,
     /// Grid height, texels.
     height: i32,
     /// The grid origins' columns that keep the grid in the box.
@@ -369,22 +377,22 @@ impl Occupancy {
         // of `F` against the placed keep-out zones (`F` meets no placed `D` exactly when `D`,
         // which is `F` grown by the padding, meets no placed `F`); else the extents of `D`
         // against the placed `F`.
+        // Scored, the runs of `D` are made only for the orientations whose candidates are
+        // scored (most orientations have none near the first fit).
         let n = orientations.len();
-        let mut scans: Vec<(usize, Runs, Scan)> = (0..n)
+        let mut scans: Vec<(usize, Scan)> = (0..n)
             .into_par_iter()
             .filter(|&k| usable[k])
             .filter_map(|k| {
                 let o = &orientations[k];
-                let (rows, scan) = if self.scored {
-                    let rows = d_rows(o)?;
-                    let scan = self.scan_start(bbox, o, &f_rows(o)?)?;
-                    (rows, scan)
+                let scan = if self.scored {
+                    o.dilated.as_ref()?;
+                    self.scan_start(bbox, o, &f_rows(o)?)?
                 } else {
                     let rows = o.dilated.as_ref().map(hull_rows)?;
-                    let scan = self.scan_start(bbox, o, &rows)?;
-                    (rows, scan)
+                    self.scan_start(bbox, o, &rows)?
                 };
-                Some((k, rows, scan))
+                Some((k, scan))
             })
             .collect();
         // The orientations go down the box together, [`SCAN_BLOCK_ROWS`] rows at a time (each
@@ -396,27 +404,27 @@ impl Occupancy {
             .max(1);
         scans.par_chunks_mut(share).for_each(|part| {
             let mut until = y0;
-            while part.iter().any(|s| !s.2.done) {
+            while part.iter().any(|s| !s.1.done) {
                 until += SCAN_BLOCK_ROWS;
-                for (_, _, scan) in part.iter_mut().filter(|s| !s.2.done) {
+                for (_, scan) in part.iter_mut().filter(|s| !s.1.done) {
                     self.scan_rows(scan, until, bbox, &gaps, window, &bound);
                 }
             }
         });
         let searched: Vec<Searched> = scans
             .into_iter()
-            .filter(|s| !s.2.out.is_empty())
-            .map(|(k, rows, scan)| (k, rows, scan.out))
+            .filter(|s| !s.1.out.is_empty())
+            .map(|(k, scan)| (k, scan.out))
             .collect();
         let first_end = searched
             .iter()
-            .flat_map(|(_, _, c)| c.iter().map(|c| c.0))
+            .flat_map(|(_, c)| c.iter().map(|c| c.0))
             .min()?;
         // (end, x, orientation, contact) of the candidates within `window` rows of the first
         // fit (only they are scored: the contact of the others is never computed).
         let found: Vec<(i32, i32, usize, i64)> = searched
             .par_iter()
-            .flat_map_iter(|(k, rows, cands)| {
+            .flat_map_iter(|(k, cands)| {
                 let k = *k;
                 let near = cands.iter().filter(|c| c.0 <= first_end + window);
                 if !self.scored {
@@ -426,8 +434,12 @@ impl Occupancy {
                 if near.is_empty() {
                     return Vec::new();
                 }
-                let h = orientations[k].height_texels as i32;
-                let ring = RingBits::new(&ring_runs(rows, h));
+                let o = &orientations[k];
+                let Some(rows) = d_rows(o) else {
+                    return Vec::new();
+                };
+                let h = o.height_texels as i32;
+                let ring = RingBits::new(&ring_runs(&rows, h));
                 near.into_iter()
                     .map(|(end, x)| (end, x, k, self.contact_bits(bbox, &ring, x, end - h)))
                     .collect()
@@ -567,8 +579,26 @@ impl Occupancy {
         let key = (0..rows.len())
             .max_by_key(|&i| (rows[i].2 - rows[i].1, std::cmp::Reverse(i)))
             .unwrap_or(0);
+        let rows = spread_out(rows, key);
+        let mut longest = vec![0i32; h.max(0) as usize];
+        for &(r, a, b) in &rows {
+            if let Some(l) = longest.get_mut(r as usize) {
+                *l = (*l).max(b - a + 1);
+            }
+        }
+        let mut seen = vec![false; longest.len()];
+        let filter = rows
+            .iter()
+            .filter_map(|&(r, _, _)| {
+                let k = usize::try_from(r).ok().filter(|&k| k < seen.len())?;
+                (!std::mem::replace(&mut seen[k], true)).then_some((r, longest[k]))
+            })
+            .collect();
         Some(Scan {
-            rows: spread_out(rows, key),
+            rows,
+            filter,
+            longest,
+            blocked: -1,
             height: h,
             x_range: (x0, x1 - w),
             y: y0,
@@ -609,8 +639,22 @@ impl Occupancy {
                 scan.done = true;
                 return;
             }
-            for &(r, a, b) in &scan.rows {
-                if gaps[(y - y0 + r) as usize] < b - a + 1 {
+            // The row filter (exact: a chart row needs a free run as long as its longest run
+            // in its canvas row). The box row that rejected the last canvas row first: where a
+            // long chart row failed, the rows of the chart above it usually fail there too.
+            let top = y - y0;
+            if scan.blocked >= 0 {
+                let r = scan.blocked - top;
+                if r >= 0
+                    && (r as usize) < scan.longest.len()
+                    && scan.longest[r as usize] > gaps[scan.blocked as usize]
+                {
+                    continue;
+                }
+            }
+            for &(r, len) in &scan.filter {
+                if gaps[(top + r) as usize] < len {
+                    scan.blocked = top + r;
                     continue 'rows;
                 }
             }
@@ -725,11 +769,8 @@ fn spread_out(rows: &[(i32, i32, i32)], key: usize) -> Vec<(i32, i32, i32)> {
     out
 }
 
-/// Runs `(row, first, last)` of a set of texels relative to a grid origin.
-type Runs = Vec<(i32, i32, i32)>;
-
-/// One orientation's search: its index, the runs of its `D` and its candidates `(end, x)`.
-type Searched = (usize, Runs, Vec<(i32, i32)>);
+/// One orientation's search: its index and its candidates `(end, x)`.
+type Searched = (usize, Vec<(i32, i32)>);
 
 /// How many canvas rows below the highest first fit ([`Occupancy::find`]) candidates are
 /// still scored. Trade-off: fewer rows miss better-touching positions, more rows cost time
