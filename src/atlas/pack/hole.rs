@@ -783,7 +783,7 @@ fn d_rows(o: &Orientation) -> Option<Vec<(i32, i32, i32)>> {
     let d = o.dilated.as_ref()?;
     Some(match &o.dilated_bits {
         Some(bits) => {
-            let mut v = Vec::new();
+            let mut v = Vec::with_capacity(o.height_texels.max(0) as usize);
             bits.for_each_run(|r, a, b| v.push((r as i32, a as i32, b as i32)));
             v
         }
@@ -795,7 +795,7 @@ fn d_rows(o: &Orientation) -> Option<Vec<(i32, i32, i32)>> {
 /// (exact: the texels of `F`; `None` when not rasterized).
 fn f_rows(o: &Orientation) -> Option<Vec<(i32, i32, i32)>> {
     let bits = o.footprint_bits.as_ref()?;
-    let mut v = Vec::new();
+    let mut v = Vec::with_capacity(o.height_texels.max(0) as usize);
     bits.for_each_run(|r, a, b| v.push((r as i32, a as i32, b as i32)));
     Some(v)
 }

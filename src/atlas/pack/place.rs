@@ -496,10 +496,12 @@ impl FootprintBits {
     pub fn for_each_run(&self, mut f: impl FnMut(u32, u32, u32)) {
         let [ox, oy] = self.origin;
         let [w, h] = self.size;
+        let mut runs = Vec::new();
         match self.turns {
             0 | 2 => {
                 for j in 0..h {
-                    for (a, b) in self.mask.runs_in(oy + j, ox, ox + w) {
+                    self.mask.runs_in(oy + j, ox, ox + w, &mut runs);
+                    for &(a, b) in &runs {
                         let (a, b) = (a - ox, b - ox);
                         if self.turns == 0 {
                             f(j, a, b);
@@ -516,13 +518,15 @@ impl FootprintBits {
                 let t = self.mask.transposed_window(ox, oy, w, h);
                 if self.turns == 1 {
                     for i in 0..w {
-                        for (a, b) in t.runs_in(i, 0, h).into_iter().rev() {
+                        t.runs_in(i, 0, h, &mut runs);
+                        for &(a, b) in runs.iter().rev() {
                             f(i, h - 1 - b, h - 1 - a);
                         }
                     }
                 } else {
                     for i in 0..w {
-                        for (a, b) in t.runs_in(w - 1 - i, 0, h) {
+                        t.runs_in(w - 1 - i, 0, h, &mut runs);
+                        for &(a, b) in &runs {
                             f(i, a, b);
                         }
                     }

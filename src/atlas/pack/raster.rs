@@ -266,12 +266,13 @@ impl Mask {
     }
 
     /// The runs of set texels of row `y` within columns `x0..x1`, as inclusive `(first, last)`
-    /// columns, left to right (clipped to the window). Cost: O((x1 - x0) / 64 + runs).
-    pub fn runs_in(&self, y: u32, x0: u32, x1: u32) -> Vec<(u32, u32)> {
-        let mut out = Vec::new();
+    /// columns, left to right (clipped to the window), in `out` (cleared first: one buffer
+    /// serves every row). Cost: O((x1 - x0) / 64 + runs).
+    pub fn runs_in(&self, y: u32, x0: u32, x1: u32, out: &mut Vec<(u32, u32)>) {
+        out.clear();
         let x1 = x1.min(self.width);
         if y >= self.height || x0 >= x1 {
-            return out;
+            return;
         }
         let row = &self.bits[y as usize * self.words_per_row..][..self.words_per_row];
         // Bit x of the row, restricted to the window: word k masked to [x0, x1).
@@ -318,7 +319,6 @@ impl Mask {
         if let Some(s) = start {
             out.push((s, x1 - 1));
         }
-        out
     }
 
     /// Per column, the first and last set row (`None` for an empty column). Cost:
