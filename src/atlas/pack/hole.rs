@@ -380,6 +380,11 @@ impl Occupancy {
         // Scored, the runs of `D` are made only for the orientations whose candidates are
         // scored (most orientations have none near the first fit).
         let n = orientations.len();
+        let f_runs = if self.scored {
+            f_rows_of(orientations, usable)
+        } else {
+            Vec::new()
+        };
         let mut scans: Vec<(usize, Scan)> = (0..n)
             .into_par_iter()
             .filter(|&k| usable[k])
@@ -387,7 +392,7 @@ impl Occupancy {
                 let o = &orientations[k];
                 let scan = if self.scored {
                     o.dilated.as_ref()?;
-                    self.scan_start(bbox, o, &f_rows(o)?)?
+                    self.scan_start(bbox, o, f_runs[k].as_ref()?)?
                 } else {
                     let rows = o.dilated.as_ref().map(hull_rows)?;
                     self.scan_start(bbox, o, &rows)?
@@ -789,6 +794,40 @@ fn d_rows(o: &Orientation) -> Option<Vec<(i32, i32, i32)>> {
         }
         None => hull_rows(d),
     })
+}
+
+/// [`f_rows`] of every orientation of `usable` (`None` for the others): an orientation half a
+/// turn from another usable one shares its mask, and its runs are that one's turned
+/// (`FootprintBits::runs_from_half_turn`), which saves half of the bit scans and of the
+/// transposes of the odd quarter turns.
+fn f_rows_of(orientations: &[Orientation], usable: &[bool]) -> Vec<Option<Vec<(i32, i32, i32)>>> {
+    use rayon::prelude::*;
+    let n = orientations.len();
+    let bits = |k: usize| orientations[k].footprint_bits.as_ref();
+    let partner: Vec<Option<usize>> = (0..n)
+        .map(|k| {
+            let own = bits(k).filter(|_| usable[k])?;
+            (0..n).find(|&j| usable[j] && bits(j).is_some_and(|b| own.is_half_turn_of(b)))
+        })
+        .collect();
+    let direct: Vec<Option<Vec<(i32, i32, i32)>>> = (0..n)
+        .into_par_iter()
+        .map(|k| {
+            (usable[k] && partner[k].is_none())
+                .then(|| f_rows(&orientations[k]))
+                .flatten()
+        })
+        .collect();
+    let turned: Vec<Option<Vec<(i32, i32, i32)>>> = (0..n)
+        .into_par_iter()
+        .map(|k| Some(bits(k)?.runs_from_half_turn(direct[partner[k]?].as_ref()?)))
+        .collect();
+    direct
+        .into_iter()
+        .zip(turned)
+        .zip(&partner)
+        .map(|((own, turned), p)| if p.is_some() { turned } else { own })
+        .collect()
 }
 
 /// The rows of `F` as runs `(row, first, last)` on the grid of `D`, row by row, left to right

@@ -535,6 +535,32 @@ impl FootprintBits {
         }
     }
 
+    /// Whether these bits are `other`'s turned by a half turn more (the same mask and window):
+    /// then [`Self::runs_from_half_turn`] gives their runs from `other`'s.
+    pub fn is_half_turn_of(&self, other: &FootprintBits) -> bool {
+        std::sync::Arc::ptr_eq(&self.mask, &other.mask)
+            && self.origin == other.origin
+            && self.size == other.size
+            && self.turns == other.turns + 2
+    }
+
+    /// The runs [`Self::for_each_run`] gives, in its order, from `runs`, those it gives for the
+    /// bits half a turn back ([`Self::is_half_turn_of`]): a half turn maps `(x, y)` to
+    /// `(width - 1 - x, height - 1 - y)` on the turned grid. No transpose and no bit scan.
+    pub fn runs_from_half_turn(&self, runs: &[(i32, i32, i32)]) -> Vec<(i32, i32, i32)> {
+        let [w, h] = self.size.map(|v| v as i32);
+        // The turned grid: `w × h` for an even number of quarter turns, `h × w` for an odd one.
+        let (gw, gh) = if self.turns % 2 == 0 { (w, h) } else { (h, w) };
+        let turn = |&(r, a, b): &(i32, i32, i32)| (gh - 1 - r, gw - 1 - b, gw - 1 - a);
+        if self.turns % 2 == 0 {
+            // Half-turned: rows from the bottom, as the window's rows are read top down.
+            runs.iter().map(turn).collect()
+        } else {
+            // Three quarter turns: rows from the top, each left to right.
+            runs.iter().rev().map(turn).collect()
+        }
+    }
+
     fn rotate90(&self) -> Self {
         Self {
             turns: (self.turns + 1) % 4,

@@ -184,6 +184,46 @@ fn footprint_bits_agree_with_the_extents_in_every_turn() {
 }
 
 #[test]
+fn runs_from_a_half_turn_are_the_runs_of_the_turned_bits() {
+    // The hole search takes the runs of the half-turned orientations from their partners':
+    // the same runs in the same order as scanning the turned bits, for both parities.
+    let runs = |b: &FootprintBits| {
+        let mut v = Vec::new();
+        b.for_each_run(|r, a, c| v.push((r as i32, a as i32, c as i32)));
+        v
+    };
+    let set = crate::atlas::pack::test_charts::mixed_set(12, 3);
+    let mut derived = [0usize; 2];
+    for (i, owned) in set.iter().enumerate() {
+        let chart = owned.as_pack_chart();
+        let prep = prepare_chart(i, &chart).unwrap();
+        for density in [4.0, 23.0] {
+            let orients = orientations(&chart, &prep, density, 8, 2, [1024, 1024], true);
+            for (k, o) in orients.iter().enumerate() {
+                let Some(bits) = &o.footprint_bits else {
+                    continue;
+                };
+                for (j, p) in orients.iter().enumerate() {
+                    let Some(back) = &p.footprint_bits else {
+                        continue;
+                    };
+                    if !bits.is_half_turn_of(back) {
+                        continue;
+                    }
+                    assert_eq!(
+                        bits.runs_from_half_turn(&runs(back)),
+                        runs(bits),
+                        "chart {i} orientation {k} from {j}"
+                    );
+                    derived[usize::from(bits.turns % 2)] += 1;
+                }
+            }
+        }
+    }
+    assert!(derived[0] > 10 && derived[1] > 10, "{derived:?}");
+}
+
+#[test]
 fn dilated_bits_are_the_chebyshev_dilation_of_the_footprint_in_every_turn() {
     // The texels of `D` that hole filling tests are exactly the grid texels within
     // `padding` (Chebyshev) of a texel of `F`, and their per-row hull is `D`'s extents.
