@@ -40,7 +40,11 @@
 //! ones to charts that need them. Deterministic, and exhaustive (every position of the
 //! searched rows is decided). [`Occupancy::first_fit_only`] is the plain first fit: the least
 //! `(y + height, x, orientation)`. A canvas row is skipped at once when one of the chart's
-//! runs is longer than its longest free run. Along a row the fitting positions are kept as
+//! first [`FILTER_ROWS`] rows (in the search order below) has a run longer than the longest
+//! free run of its canvas row, or when the canvas row that rejected the last one does so again
+//! for the chart row now on it. The runs of `F` of an orientation half a turn from another are
+//! that one's turned, and the runs of `D` are made only for the orientations whose candidates
+//! are scored. Along a row the fitting positions are kept as
 //! sorted intervals: each run `[a, b]` of the chart (the longest first, then the others
 //! spread out) keeps only the positions where it lies inside one free run `[s, e]` of its
 //! canvas row at least as long — the positions `s − a ..= e − b` — until none is left or
@@ -55,7 +59,7 @@
 //!
 //! Units: texels (`i32` canvas coordinates).
 //!
-//! Cost per orientation: O(box rows × runs of the chart) for the row filter at worst, plus
+//! Cost per orientation: O(box rows × [`FILTER_ROWS`]) for the row filter at worst, plus
 //! per surviving row O(intervals left × log free runs + long enough free runs met) per chart
 //! run, for the rows down to its first fit and [`CANDIDATE_ROWS`] more (the row stops when no
 //! position is left); per candidate O(ring runs × run length / 64); per commit, O(runs of
@@ -285,8 +289,8 @@ struct Scan {
 /// switches between the searches.
 pub const SCAN_BLOCK_ROWS: i32 = 8;
 
-/// Chart rows the row filter of [`Occupancy::scan_rows`] tests before the exact test of
-/// [`Occupancy::scan_row`] (which rejects the same canvas rows, and more). Trade-off: a canvas
+/// Chart rows the row filter of [`Occupancy::find`] tests before the exact test of a canvas
+/// row (which rejects the same canvas rows, and more). Trade-off: a canvas
 /// row that a chart's key row lets through mostly passes every row of the filter, which then
 /// costs one test per chart row for nothing; a short filter still rejects most canvas rows that
 /// it would reject whole. Measured (callgrind, one thread, cakeBirthday's whole command):
