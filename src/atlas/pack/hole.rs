@@ -294,7 +294,8 @@ pub const SCAN_BLOCK_ROWS: i32 = 8;
 /// key row lets through mostly passes every other row of the filter too, which then costs one
 /// test per chart row for nothing; a short filter still rejects most of the canvas rows that
 /// the whole filter rejects. Measured (callgrind, one thread, cakeBirthday's whole command):
-/// every row 8.45G instructions, 8 rows 7.99G; 4, 12 and 32 rows within 0.5% of 8.
+/// every row 8.45G instructions, 8 rows 7.99G; a build reading the count at run time gave 4,
+/// 12 and 32 rows 8.02G, 8.02G and 8.06G.
 pub const FILTER_ROWS: usize = 8;
 
 /// Scratch buffers of [`Occupancy::scan_row`]: the positions that fit every chart row so far

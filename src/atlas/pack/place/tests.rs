@@ -136,20 +136,30 @@ fn chain_fill_holds_every_covered_centre_and_only_near_ones() {
     assert!(checked > 10_000, "{checked}");
 }
 
-/// `f(chart, orientation index, orientation)` for every orientation (8 rotations, padding
-/// 2, a 1024² page) of every chart of `mixed_set(n, seed)`, at densities 4 and 23.
-fn for_each_orientation(n: usize, seed: u64, mut f: impl FnMut(usize, usize, &Orientation)) {
+/// `f(chart, orientations)` for the orientations (8 rotations, padding 2, a 1024² page) of
+/// every chart of `mixed_set(n, seed)`, at densities 4 and 23.
+fn for_each_orientation_set(n: usize, seed: u64, mut f: impl FnMut(usize, &[Orientation])) {
     let set = crate::atlas::pack::test_charts::mixed_set(n, seed);
     for (i, owned) in set.iter().enumerate() {
         let chart = owned.as_pack_chart();
         let prep = prepare_chart(i, &chart).unwrap();
         for density in [4.0, 23.0] {
-            let orients = orientations(&chart, &prep, density, 8, 2, [1024, 1024], true);
-            for (k, o) in orients.iter().enumerate() {
-                f(i, k, o);
-            }
+            f(
+                i,
+                &orientations(&chart, &prep, density, 8, 2, [1024, 1024], true),
+            );
         }
     }
+}
+
+/// `f(chart, orientation index, orientation)` for every orientation of
+/// [`for_each_orientation_set`].
+fn for_each_orientation(n: usize, seed: u64, mut f: impl FnMut(usize, usize, &Orientation)) {
+    for_each_orientation_set(n, seed, |i, orients| {
+        for (k, o) in orients.iter().enumerate() {
+            f(i, k, o);
+        }
+    });
 }
 
 #[test]
@@ -192,34 +202,29 @@ fn runs_from_a_half_turn_are_the_runs_of_the_turned_bits() {
         b.for_each_run(|r, a, c| v.push((r as i32, a as i32, c as i32)));
         v
     };
-    let set = crate::atlas::pack::test_charts::mixed_set(12, 3);
     let mut derived = [0usize; 2];
-    for (i, owned) in set.iter().enumerate() {
-        let chart = owned.as_pack_chart();
-        let prep = prepare_chart(i, &chart).unwrap();
-        for density in [4.0, 23.0] {
-            let orients = orientations(&chart, &prep, density, 8, 2, [1024, 1024], true);
-            for (k, o) in orients.iter().enumerate() {
-                let Some(bits) = &o.footprint_bits else {
+    for_each_orientation_set(12, 3, |i, orients| {
+        for (k, o) in orients.iter().enumerate() {
+            let Some(bits) = &o.footprint_bits else {
+                continue;
+            };
+            for (j, p) in orients.iter().enumerate() {
+                let Some(back) = p
+                    .footprint_bits
+                    .as_ref()
+                    .filter(|b| bits.is_half_turn_of(b))
+                else {
                     continue;
                 };
-                for (j, p) in orients.iter().enumerate() {
-                    let Some(back) = &p.footprint_bits else {
-                        continue;
-                    };
-                    if !bits.is_half_turn_of(back) {
-                        continue;
-                    }
-                    assert_eq!(
-                        bits.runs_from_half_turn(&runs(back)),
-                        runs(bits),
-                        "chart {i} orientation {k} from {j}"
-                    );
-                    derived[usize::from(bits.turns % 2)] += 1;
-                }
+                assert_eq!(
+                    bits.runs_from_half_turn(&runs(back)),
+                    runs(bits),
+                    "chart {i} orientation {k} from {j}"
+                );
+                derived[usize::from(bits.turns % 2)] += 1;
             }
         }
-    }
+    });
     assert!(derived[0] > 10 && derived[1] > 10, "{derived:?}");
 }
 
