@@ -786,12 +786,11 @@ fn orient(
             ),
             CENTRE_GROW_TEXELS,
         );
-        let near = if core {
-            mask.dilate(padding_texels / 2)
+        if core {
+            mask.add_except_dilated(&touched, padding_texels / 2);
         } else {
-            Mask::new(mask.width(), mask.height())
-        };
-        mask.add_except(&touched, &near);
+            mask.add_except(&touched, &Mask::new(mask.width(), mask.height()));
+        }
     }
     if chart.triangles.is_empty() {
         // A chart without triangles still gets its one texel.

@@ -182,6 +182,75 @@ impl Mask {
         }
     }
 
+    /// Adds the texels of `extra` that are farther than `r` (Chebyshev) from every texel of this
+    /// mask (same grid): `self |= extra & !self.dilate(r)`, the same bits. The dilation is made
+    /// only at the words where `extra` has a texel outside this mask (a boundary band, where a
+    /// footprint's touched texels lie), not over the whole grid. Cost: O(words × (2r + 1)) for
+    /// those words, plus one pass over the grid; `r ≥ 64` dilates the whole grid.
+    pub fn add_except_dilated(&mut self, extra: &Mask, r: u32) {
+        assert!(
+            (self.width, self.height) == (extra.width, extra.height),
+            "masks on one grid"
+        );
+        if r >= 64 {
+            let near = self.dilate(r);
+            self.add_except(extra, &near);
+            return;
+        }
+        let wpr = self.words_per_row;
+        if wpr == 0 {
+            return;
+        }
+        let h = self.height as usize;
+        let last_word_mask = match self.width % 64 {
+            0 => u64::MAX,
+            rem => (1u64 << rem) - 1,
+        };
+        // Word `k` of row `y` grown by `r` along the row, as `dilate`'s horizontal pass.
+        let grown = |y: usize, k: usize| -> u64 {
+            let row = &self.bits[y * wpr..][..wpr];
+            let c = row[k];
+            let prev = if k > 0 { row[k - 1] } else { 0 };
+            let next = if k + 1 < wpr { row[k + 1] } else { 0 };
+            let mut acc = c;
+            for s in 1..=r {
+                acc |= (c << s) | (prev >> (64 - s)) | (c >> s) | (next << (64 - s));
+            }
+            if k + 1 == wpr {
+                acc &= last_word_mask;
+            }
+            acc
+        };
+        let mut add: Vec<(usize, u64)> = Vec::new();
+        for (i, (&x, &own)) in extra.bits.iter().zip(&self.bits).enumerate() {
+            let outside = x & !own;
+            if outside == 0 {
+                continue;
+            }
+            let (y, k) = (i / wpr, i % wpr);
+            // Row `y` first, then the rows outwards: most such texels are next to this mask
+            // in their own row, and the search stops once every one is near.
+            let mut left = outside & !grown(y, k);
+            for d in 1..=r as usize {
+                if left == 0 {
+                    break;
+                }
+                if d <= y {
+                    left &= !grown(y - d, k);
+                }
+                if y + d < h {
+                    left &= !grown(y + d, k);
+                }
+            }
+            if left != 0 {
+                add.push((i, left));
+            }
+        }
+        for (i, bits) in add {
+            self.bits[i] |= bits;
+        }
+    }
+
     /// The 64 texels of row `y` from column `x` on (bit `k`: column `x + k`; texels past the
     /// width count as clear).
     fn word_at(&self, y: u32, x: u32) -> u64 {
@@ -655,7 +724,26 @@ pub fn fill_chain_with_core(
             }
         }
     }
-    crossings.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    // Sorted by row, then by x, stably (the order of `sort_by` on `(row, x)`): grouped by row
+    // in edge order (a counting sort), then each row's few crossings sorted by x.
+    let mut row_start = vec![0usize; h as usize + 1];
+    for c in &crossings {
+        row_start[c.0 as usize + 1] += 1;
+    }
+    for j in 0..h as usize {
+        row_start[j + 1] += row_start[j];
+    }
+    let mut sorted = vec![(0.0f64, 0i32); crossings.len()];
+    {
+        let mut next = row_start.clone();
+        for &(row, x, d) in &crossings {
+            sorted[next[row as usize]] = (x, d);
+            next[row as usize] += 1;
+        }
+    }
+    for j in 0..h as usize {
+        sort_row_by_x(&mut sorted[row_start[j]..row_start[j + 1]]);
+    }
     let mut emit = |mask: &mut Mask, row: u32, xa: f64, xb: f64| {
         let i0 = ceil_i(xa - 0.5).max(0);
         let i1 = if xb.is_finite() {
@@ -671,22 +759,19 @@ pub fn fill_chain_with_core(
             any = true;
         }
     };
-    let mut k = 0;
-    while k < crossings.len() {
-        let row = crossings[k].0;
+    for row in 0..h as usize {
         let mut wind = 0i32;
         let mut start = 0.0;
-        while k < crossings.len() && crossings[k].0 == row {
-            let (_, x, d) = crossings[k];
+        for &(x, d) in &sorted[row_start[row]..row_start[row + 1]] {
             if wind == 0 {
                 start = x;
             }
             wind += d;
             if wind == 0 {
-                emit(mask, row, start, x);
+                emit(mask, row as u32, start, x);
             }
-            k += 1;
         }
+        let row = row as u32;
         if wind != 0 {
             // Not closed in this row (only for a chain that is not a cycle): conservative.
             emit(mask, row, start, f64::INFINITY);
@@ -721,6 +806,22 @@ pub fn fill_chain_with_core(
         }
     };
     (any, core)
+}
+
+/// Sorts one row's crossings `(x, direction)` by `x`, stably (`total_cmp`): an insertion sort,
+/// as a row holds a few crossings, and `sort_by` on long rows.
+fn sort_row_by_x(row: &mut [(f64, i32)]) {
+    if row.len() > 16 {
+        row.sort_by(|a, b| a.0.total_cmp(&b.0));
+        return;
+    }
+    for i in 1..row.len() {
+        let mut j = i;
+        while j > 0 && row[j - 1].0.total_cmp(&row[j].0) == std::cmp::Ordering::Greater {
+            row.swap(j - 1, j);
+            j -= 1;
+        }
+    }
 }
 
 /// Transposes a 64 × 64 bit matrix in place (row `k` = word `k`, column `m` = bit `m`): bit

@@ -255,3 +255,44 @@ fn dilation_is_chebyshev_and_extents_are_per_line() {
     assert_eq!(d.column_extents()[3], Some((2, 6)));
     assert_eq!(d.row_extents()[4], Some((1, 68)));
 }
+
+#[test]
+fn adding_except_near_equals_adding_except_the_dilation() {
+    let mut state = 0x0bad_cafe_1234_5678u64;
+    for case in 0..60 {
+        let (w, h) = (
+            1 + (xorshift(&mut state) * 200.0) as u32,
+            1 + (xorshift(&mut state) * 120.0) as u32,
+        );
+        // Sparse and dense masks both: the own texels at one density, the extra at another.
+        let (p_own, p_extra) = (xorshift(&mut state) * 0.3, xorshift(&mut state) * 0.5);
+        let mut own = Mask::new(w, h);
+        let mut extra = Mask::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                if xorshift(&mut state) < p_own {
+                    own.set_span(y, x, x);
+                }
+                if xorshift(&mut state) < p_extra {
+                    extra.set_span(y, x, x);
+                }
+            }
+        }
+        for r in [0, 1, 2, 3, 5, 63, 64, 70] {
+            let mut expected = own.clone();
+            expected.add_except(&extra, &own.dilate(r));
+            let mut got = own.clone();
+            got.add_except_dilated(&extra, r);
+            assert_eq!(got.count(), expected.count(), "case {case}, r {r}");
+            for y in 0..i64::from(h) {
+                for x in 0..i64::from(w) {
+                    assert_eq!(
+                        got.get(x, y),
+                        expected.get(x, y),
+                        "case {case}, r {r}: ({x}, {y})"
+                    );
+                }
+            }
+        }
+    }
+}
