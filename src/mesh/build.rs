@@ -12,6 +12,8 @@
 //!    each run of equal hashes is confirmed (or, on a collision, split) by the full key, and each
 //!    group of equal keys becomes one welded vertex, named by its lowest source index.
 //! 3. Degenerate faces: repeated welded vertex, or zero area (`geometry::triangle_is_zero_area`).
+//!    The ends of a near-zero-length edge of a zero-area face are joined (union-find, each group
+//!    named by its lowest source index; [`NEAR_WELD_RELATIVE`]), and the faces classified again.
 //!    Faces with a repeated vertex are isolated (their corners become vertices of their own).
 //! 4. Group half-edges by undirected welded edge (bucket by lower end, sort each bucket) and glue:
 //!    exactly one half-edge each way → glued; otherwise repair (pair greedily or cut) and report.
@@ -25,7 +27,9 @@
 //! order costs cache misses), about 130 bytes per face at peak including the input.
 //!
 //! Units: positions in model units (`_m`), untouched (no transform, no rescaling).
-use rayon::iter::{IntoParallelIterator, ParallelIterator};
+use rayon::iter::{
+    IndexedParallelIterator, IntoParallelIterator, IntoParallelRefIterator, ParallelIterator,
+};
 use rayon::slice::ParallelSliceMut;
 
 use super::defect::{BadIndex, DegenerateKind, MeshBuildError, MeshDefect, Offenders};
@@ -47,9 +51,31 @@ pub struct BuiltMesh {
     /// edge defects (by lowest face), non-manifold vertices (by source vertex), unreferenced vertices.
     pub defects: Vec<MeshDefect>,
     /// Number of distinct welded vertices (used source vertices after welding by position and
-    /// group), before repair splits and isolated-face copies. `mesh.num_vertices()` is at least
+    /// group, and after the joins of near-coincident ends of zero-area faces), before repair
+    /// splits and isolated-face copies. `mesh.num_vertices()` is at least
     /// this on a mesh without repeated-vertex faces.
     pub num_welded_vertices: usize,
+}
+
+/// An edge of a zero-area face at most this fraction of the face's longest edge joins its two
+/// ends (the module doc of [`crate::mesh`], "Weld rule").
+pub const NEAR_WELD_RELATIVE: f64 = 1e-9;
+
+/// The corner `k` whose edge to corner `k + 1` is the shortest of the triangle `p` when that
+/// edge is at most [`NEAR_WELD_RELATIVE`] of the longest (ties: the lowest `k`); `None`
+/// otherwise, or when the triangle has no length at all (every corner equal).
+fn near_coincident_edge(p: &[[f64; 3]; 3]) -> Option<usize> {
+    let len2 = |a: [f64; 3], b: [f64; 3]| {
+        let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+    };
+    let l = [len2(p[0], p[1]), len2(p[1], p[2]), len2(p[2], p[0])];
+    let longest = l[0].max(l[1]).max(l[2]);
+    if !(longest > 0.0 && longest.is_finite()) {
+        return None;
+    }
+    let k = (0..3).min_by(|&a, &b| l[a].total_cmp(&l[b]))?;
+    (l[k] <= NEAR_WELD_RELATIVE * NEAR_WELD_RELATIVE * longest).then_some(k)
 }
 
 /// `-0.0` and `0.0` weld together: compare bits of the coordinate with the sign of zero cleared.
@@ -136,22 +162,62 @@ impl TriangleMesh {
         let (welded, num_welded_vertices) = weld(input, &referenced);
         drop(referenced);
         let corner_source: Vec<u32> = tris.iter().flatten().copied().collect();
-        let wv: Vec<u32> = corner_source.iter().map(|&s| welded[s as usize]).collect();
+        let mut wv: Vec<u32> = corner_source.iter().map(|&s| welded[s as usize]).collect();
         drop(welded);
+        let mut num_welded_vertices = num_welded_vertices;
 
         // 3. Degenerate faces (independent per face: parallel map, collected in face order).
-        let face_degeneracy: Vec<Option<DegenerateKind>> = (0..nf)
-            .into_par_iter()
-            .map(|f| {
-                let [a, b, c] = [wv[3 * f], wv[3 * f + 1], wv[3 * f + 2]];
-                if a == b || b == c || a == c {
-                    Some(DegenerateKind::RepeatedVertex)
-                } else {
-                    let p = tris[f].map(|i| pos[i as usize]);
-                    triangle_is_zero_area(&p).then_some(DegenerateKind::ZeroArea)
-                }
+        let degeneracy = |wv: &[u32]| -> Vec<Option<DegenerateKind>> {
+            (0..nf)
+                .into_par_iter()
+                .map(|f| {
+                    let [a, b, c] = [wv[3 * f], wv[3 * f + 1], wv[3 * f + 2]];
+                    if a == b || b == c || a == c {
+                        Some(DegenerateKind::RepeatedVertex)
+                    } else {
+                        let p = tris[f].map(|i| pos[i as usize]);
+                        triangle_is_zero_area(&p).then_some(DegenerateKind::ZeroArea)
+                    }
+                })
+                .collect()
+        };
+        let mut face_degeneracy = degeneracy(&wv);
+        // 3b. Near-coincident ends of a zero-area face (the module doc of `crate::mesh`).
+        let joins: Vec<(u32, u32)> = face_degeneracy
+            .par_iter()
+            .enumerate()
+            .filter(|(_, k)| **k == Some(DegenerateKind::ZeroArea))
+            .filter_map(|(f, _)| {
+                let k = near_coincident_edge(&tris[f].map(|i| pos[i as usize]))?;
+                let (a, b) = (tris[f][k], tris[f][(k + 1) % 3]);
+                (input.weld_group[a as usize] == input.weld_group[b as usize])
+                    .then_some((wv[3 * f + k], wv[3 * f + (k + 1) % 3]))
             })
             .collect();
+        if !joins.is_empty() {
+            // Union-find over welded vertices, each group named by its lowest source index (as
+            // the weld names them), so the result does not depend on the order of the joins.
+            let mut parent: Vec<u32> = (0..ns as u32).collect();
+            let find = |parent: &mut Vec<u32>, mut x: u32| {
+                while parent[x as usize] != x {
+                    let up = parent[parent[x as usize] as usize];
+                    parent[x as usize] = up;
+                    x = up;
+                }
+                x
+            };
+            for (a, b) in joins {
+                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+                if ra != rb {
+                    parent[ra.max(rb) as usize] = ra.min(rb);
+                    num_welded_vertices -= 1;
+                }
+            }
+            for w in wv.iter_mut() {
+                *w = find(&mut parent, *w);
+            }
+            face_degeneracy = degeneracy(&wv);
+        }
         let mut defects: Vec<MeshDefect> = face_degeneracy
             .iter()
             .enumerate()

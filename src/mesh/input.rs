@@ -11,8 +11,10 @@ pub struct MeshInput {
     /// Triangles as indices into `positions_m`, in the source's corner order. Face `i` of the
     /// built mesh is triangle `i` here: the order is never changed, so results map back 1:1.
     pub triangles: Vec<[u32; 3]>,
-    /// Welding scope per source vertex: two vertices are welded only if their positions are
-    /// bit-identical (after `-0.0 == 0.0`) AND their groups are equal. `gltf_io` uses the glTF
+    /// Welding scope per source vertex: two vertices are welded only if their groups are equal
+    /// AND their positions are bit-identical (after `-0.0 == 0.0`), or they end an edge of a
+    /// zero-area face at most `NEAR_WELD_RELATIVE` of its longest (the weld rule of
+    /// [`crate::mesh`]). `gltf_io` uses the glTF
     /// mesh index, because different meshes live in different local spaces.
     pub weld_group: Vec<u32>,
 }

@@ -10,8 +10,16 @@
 //! Corners are welded by *position only*, never by normal or UV, to recover the real surface
 //! topology from a file whose vertices are split at normal and UV seams: two source vertices
 //! become one vertex when their coordinates are bit-identical (`-0.0` counts as `0.0`) and their
-//! `weld_group` is equal. No distance tolerance: nearly coincident vertices stay apart, because
-//! merging them would change the asset's geometry, which must come back untouched.
+//! `weld_group` is equal. No distance tolerance in general: nearly coincident vertices stay apart,
+//! as an asset may model a crack or a gap that thin on purpose. One exception: the two ends of
+//! an edge of a zero-area face (three distinct, collinear vertices) that is at most
+//! [`NEAR_WELD_RELATIVE`] (1e-9) of the face's longest edge are one vertex too (same
+//! `weld_group`), joined transitively. Such a face is a slit between coincident copies of a
+//! vertex whose coordinates differ by rounding (the poles of a UV sphere computed as
+//! `sin(π) ≈ 1.2e-16`); without the join the faces around the copies meet only through the slits,
+//! their chart flattens each copy apart, and the written atlas splits there into pieces that
+//! keep no padding between them. The asset's positions are never changed: only the connectivity
+//! the pipeline works on.
 //!
 //! # Repair policy
 //! Fatal (a [`MeshBuildError`], nothing built): zero triangles, `weld_group` length mismatch,
@@ -73,7 +81,7 @@ pub(crate) mod vector;
 #[cfg(test)]
 mod tests;
 
-pub use build::{BuiltMesh, MAX_TRIANGLES};
+pub use build::{BuiltMesh, MAX_TRIANGLES, NEAR_WELD_RELATIVE};
 pub use components::{ComponentInfo, Components};
 pub use defect::{BadIndex, DegenerateKind, MeshBuildError, MeshDefect, Offenders, MAX_LISTED};
 pub use geometry::{triangle_is_zero_area, Aabb, ZERO_AREA_RELATIVE_TOLERANCE};

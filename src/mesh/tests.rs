@@ -991,3 +991,52 @@ fn navigation_wrappers_agree_with_id_arithmetic() {
         .sum();
     assert!((defect - 4.0 * PI).abs() < 1e-9, "{defect}");
 }
+
+/// The weld rule's one tolerance: the ends of a zero-area face's edge at most
+/// `NEAR_WELD_RELATIVE` of its longest edge are one vertex (the face then repeats a vertex);
+/// a zero-area face whose shortest edge is longer keeps its three vertices.
+#[test]
+fn near_coincident_ends_of_a_zero_area_face_are_joined_and_only_those() {
+    // Two faces on either side of the x axis meeting at copies 0 and 3 of one point, `gap`
+    // apart, with the zero-area slit [1, 3, 0] between them.
+    let slit = |gap: f64| {
+        MeshInput::single_group(
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.5, 1.0, 0.0],
+                [gap, 0.0, 0.0],
+                [0.5, -1.0, 0.0],
+            ],
+            vec![[0, 1, 2], [1, 3, 0], [1, 3, 4]],
+        )
+    };
+    // (Not `build_ok`: corner 1 of face 1 and of face 2 is at source 3, 1e-16 from the
+    // position of the vertex it joined, source 0's.)
+    let b = TriangleMesh::build(&slit(1e-16)).expect("builds");
+    assert_eq!(b.mesh.check_invariants(), Ok(()));
+    assert_eq!(
+        b.mesh.position(b.mesh.face_vertices(FaceId(2))[1]),
+        [0.0; 3]
+    );
+    assert_eq!(
+        b.mesh.face_degeneracy(FaceId(1)),
+        Some(DegenerateKind::RepeatedVertex)
+    );
+    assert_eq!(b.num_welded_vertices, 4);
+    // The real faces share the edge 0–1 now: glued, one vertex at the point.
+    let [a0, a1, _] = b.mesh.face_vertices(FaceId(0));
+    let [c0, c1, _] = b.mesh.face_vertices(FaceId(2));
+    assert_eq!((a0, a1), (c1, c0));
+    // A gap of 1e-6 of the edge is a real (if thin) feature: nothing is joined.
+    let b = build_ok(&slit(1e-6));
+    assert_eq!(
+        b.mesh.face_degeneracy(FaceId(1)),
+        Some(DegenerateKind::ZeroArea)
+    );
+    assert_eq!(b.num_welded_vertices, 5);
+    assert_ne!(
+        b.mesh.face_vertices(FaceId(0))[0],
+        b.mesh.face_vertices(FaceId(2))[1]
+    );
+}

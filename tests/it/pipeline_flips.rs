@@ -221,3 +221,76 @@ proptest! {
         prop_assert_eq!((flipped, deg_uv_3d), (0, 0), "stats {:?}", atlas.stats);
     }
 }
+
+/// A UV sphere as exporters write it: a grid of `n × m` quads whose first and last rows are
+/// copies of the poles, each quad two triangles, so that every pole quad gives one real face and
+/// one zero-area slit between two pole copies. The south pole's copies come from `sin(π)`
+/// (about 1.2e-16, not 0), so they differ by rounding and do not weld by position. Positions
+/// are rounded to `f32`, as a glTF file holds them.
+fn sphere_with_rounded_pole_copies(n: u32, m: u32) -> MeshInput {
+    let mut positions_m = Vec::new();
+    for j in 0..=m {
+        for i in 0..=n {
+            let (u, v) = (f64::from(i) / f64::from(n), f64::from(j) / f64::from(m));
+            let (theta, phi) = (std::f64::consts::PI * v, 2.0 * std::f64::consts::PI * u);
+            // In `f32`, as a glTF file holds them.
+            positions_m.push(
+                [
+                    theta.sin() * phi.cos(),
+                    theta.sin() * phi.sin(),
+                    theta.cos(),
+                ]
+                .map(|x| f64::from(x as f32)),
+            );
+        }
+    }
+    let mut triangles = Vec::new();
+    for j in 0..m {
+        for i in 0..n {
+            let a = j * (n + 1) + i;
+            let (b, c) = (a + 1, a + n + 1);
+            triangles.push([a, b, c + 1]);
+            triangles.push([a, c + 1, c]);
+        }
+    }
+    let weld_group = vec![0; positions_m.len()];
+    MeshInput {
+        positions_m,
+        triangles,
+        weld_group,
+    }
+}
+
+/// The pole copies that differ by rounding are one vertex (the weld rule's near-coincident ends
+/// of zero-area faces): every real face at the south pole uses the same vertex there, and the
+/// atlas keeps the padding everywhere. Without that join the faces around the pole met only
+/// through the slits, their chart flattened each copy apart, and the written atlas split into
+/// pieces with no padding between them (453 violation texels on a 32 × 16 sphere).
+#[test]
+fn rounded_pole_copies_are_one_vertex_and_the_atlas_keeps_its_padding() {
+    let input = sphere_with_rounded_pole_copies(32, 16);
+    let south = input.positions_m.len() - 1;
+    assert_ne!(
+        input.positions_m[south],
+        input.positions_m[south - 1],
+        "the copies must differ by rounding for this test to mean anything"
+    );
+    let mesh = TriangleMesh::build(&input).expect("builds").mesh;
+    let at_pole: std::collections::BTreeSet<VertexId> = (0..mesh.num_faces())
+        .map(|f| FaceId(f as u32))
+        .filter(|&f| mesh.face_degeneracy(f).is_none())
+        .flat_map(|f| mesh.face_vertices(f))
+        .filter(|&v| mesh.position(v)[2] < -1.0 + 1e-12)
+        .collect();
+    assert_eq!(
+        at_pole.len(),
+        1,
+        "south pole vertices of real faces: {at_pole:?}"
+    );
+    let atlas = generate(&mesh, &AtlasOptions::default(), &mut NoProgress).expect("generates");
+    assert_eq!(atlas.report.padding.violation_texels, 0);
+    assert_eq!(atlas.report.overlap.sampled.overlapping_texels, 0);
+    assert_eq!(atlas.report.overlap.exact.pairs, 0);
+    let (flipped, deg_uv_3d) = recount(&mesh, &atlas.corner_uvs, &atlas.face_page);
+    assert_eq!((flipped, deg_uv_3d), (0, 0));
+}
