@@ -194,7 +194,8 @@ impl TriangleMesh {
                     .then_some((wv[3 * f + k], wv[3 * f + (k + 1) % 3]))
             })
             .collect();
-        if !joins.is_empty() {
+        let joined = !joins.is_empty();
+        if joined {
             // Union-find over welded vertices, each group named by its lowest source index (as
             // the weld names them), so the result does not depend on the order of the joins.
             let mut parent: Vec<u32> = (0..ns as u32).collect();
@@ -415,7 +416,20 @@ impl TriangleMesh {
             });
         }
 
+        // The sources whose own position is not their vertex's: only after joins.
+        let mut moved_sources: Vec<(u32, [f64; 3])> = Vec::new();
+        if joined {
+            for (c, &s) in corner_source.iter().enumerate() {
+                let own = pos[s as usize];
+                if own.map(weld_bits) != positions_m[corner_vertex[c].index()].map(weld_bits) {
+                    moved_sources.push((s, own));
+                }
+            }
+            moved_sources.sort_unstable_by_key(|e| e.0);
+            moved_sources.dedup_by_key(|e| e.0);
+        }
         let mesh = TriangleMesh {
+            moved_sources,
             positions_m,
             corner_vertex,
             opposite,

@@ -1019,6 +1019,13 @@ fn near_coincident_ends_of_a_zero_area_face_are_joined_and_only_those() {
         b.mesh.position(b.mesh.face_vertices(FaceId(2))[1]),
         [0.0; 3]
     );
+    // ... and the corner keeps its own position, as the file holds it.
+    assert!(b.mesh.has_moved_sources());
+    assert_eq!(
+        b.mesh.corner_position(FaceId(2).corner(1)),
+        [1e-16, 0.0, 0.0]
+    );
+    assert_eq!(b.mesh.corner_position(FaceId(0).corner(0)), [0.0; 3]);
     assert_eq!(
         b.mesh.face_degeneracy(FaceId(1)),
         Some(DegenerateKind::RepeatedVertex)
@@ -1035,6 +1042,7 @@ fn near_coincident_ends_of_a_zero_area_face_are_joined_and_only_those() {
         Some(DegenerateKind::ZeroArea)
     );
     assert_eq!(b.num_welded_vertices, 5);
+    assert!(!b.mesh.has_moved_sources());
     assert_ne!(
         b.mesh.face_vertices(FaceId(0))[0],
         b.mesh.face_vertices(FaceId(2))[1]

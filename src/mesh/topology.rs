@@ -47,6 +47,10 @@ pub struct TriangleMesh {
     pub(crate) corner_source: Vec<u32>,
     /// Degeneracy of each face, found at build time.
     pub(crate) face_degeneracy: Vec<Option<DegenerateKind>>,
+    /// The source vertices whose own position differs from their vertex's (the weld joined
+    /// them to a near-coincident copy), by source index: `(source, position)`. Empty on most
+    /// meshes.
+    pub(crate) moved_sources: Vec<(u32, [f64; 3])>,
 }
 
 /// A broken connectivity invariant: a bug in mesh building, never an input problem.
@@ -278,6 +282,24 @@ impl TriangleMesh {
     #[inline]
     pub fn corner_source(&self, c: CornerId) -> u32 {
         self.corner_source[c.index()]
+    }
+    /// The position of corner `c`'s source vertex, as the input holds it: its vertex's position,
+    /// except where the weld joined near-coincident copies (the weld rule of [`crate::mesh`]).
+    #[inline]
+    pub fn corner_position(&self, c: CornerId) -> [f64; 3] {
+        if !self.moved_sources.is_empty() {
+            let s = self.corner_source[c.index()];
+            if let Ok(j) = self.moved_sources.binary_search_by_key(&s, |e| e.0) {
+                return self.moved_sources[j].1;
+            }
+        }
+        self.positions_m[self.corner_vertex[c.index()].index()]
+    }
+    /// Whether some corner's source position differs from its vertex's
+    /// ([`TriangleMesh::corner_position`]).
+    #[inline]
+    pub fn has_moved_sources(&self) -> bool {
+        !self.moved_sources.is_empty()
     }
     /// The weld group (from `MeshInput::weld_group`) of `v`.
     #[inline]

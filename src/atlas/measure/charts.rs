@@ -126,37 +126,63 @@ pub(super) fn connectivity(
 ) -> Connectivity {
     let nf = mesh.num_faces();
     // 1. Position ids (glTF mesh + position bits), per mesh vertex: one sort over the vertices.
+    //    A corner whose source position differs from its vertex's (`TriangleMesh::corner_position`:
+    //    the weld joined near-coincident copies) gets the id of its own position, as in the file:
+    //    such corners are keyed as extra entries `nv + j`, `j` their corner index in `moved`.
     let nv = mesh.num_vertices();
+    let moved: Vec<u32> = if mesh.has_moved_sources() {
+        (0..3 * nf as u32)
+            .filter(|&c| {
+                let (f, k) = (FaceId(c / 3), (c % 3) as usize);
+                mesh.corner_position(f.corner(k)) != mesh.position(mesh.face_vertices(f)[k])
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let key_of =
+        |group: u32, p: [f64; 3], id: u32| (group, [fold64(p[0]), fold64(p[1]), fold64(p[2])], id);
     let mut vkeys: Vec<(u32, [i64; 3], u32)> = (0..nv as u32)
         .map(|v| {
             let vid = VertexId(v);
-            let p = mesh.position(vid);
-            (
-                mesh.vertex_weld_group(vid),
-                [fold64(p[0]), fold64(p[1]), fold64(p[2])],
-                v,
-            )
+            key_of(mesh.vertex_weld_group(vid), mesh.position(vid), v)
         })
+        .chain(moved.iter().enumerate().map(|(j, &c)| {
+            let (f, k) = (FaceId(c / 3), (c % 3) as usize);
+            let v = mesh.face_vertices(f)[k];
+            key_of(
+                mesh.vertex_weld_group(v),
+                mesh.corner_position(f.corner(k)),
+                (nv + j) as u32,
+            )
+        }))
         .collect();
     vkeys.sort_unstable();
-    let mut pid_of_vertex = vec![0u32; nv];
+    let mut pid_of_vertex = vec![0u32; nv + moved.len()];
     let mut num_pids = 0u32;
-    for i in 0..nv {
+    for i in 0..vkeys.len() {
         if i > 0 && (vkeys[i].0, vkeys[i].1) != (vkeys[i - 1].0, vkeys[i - 1].1) {
             num_pids += 1;
         }
         pid_of_vertex[vkeys[i].2 as usize] = num_pids;
     }
-    let num_pids = if nv == 0 { 0 } else { num_pids as usize + 1 };
+    let num_pids = if vkeys.is_empty() {
+        0
+    } else {
+        num_pids as usize + 1
+    };
     drop(vkeys);
 
     // 2. Corner ids: bucket corners by position id, then sort each bucket by (page, u, v).
-    let corner_pid: Vec<u32> = (0..nf)
+    let mut corner_pid: Vec<u32> = (0..nf)
         .flat_map(|f| {
             mesh.face_vertices(FaceId(f as u32))
                 .map(|v| pid_of_vertex[v.index()])
         })
         .collect();
+    for (j, &c) in moved.iter().enumerate() {
+        corner_pid[c as usize] = pid_of_vertex[nv + j];
+    }
     // Half-edge e = 3f + k runs from corner k to corner k+1 of face f; its unordered ends.
     let ends = |ids: &[u32], e: usize| {
         let (f, k) = (e / 3, e % 3);
