@@ -222,7 +222,7 @@ proptest! {
     }
 }
 
-/// A UV sphere as exporters write it: a grid of `n × m` quads whose first and last rows are
+/// A UV sphere as naive generators write it: a grid of `n × m` quads whose first and last rows are
 /// copies of the poles, each quad two triangles, so that every pole quad gives one real face and
 /// one zero-area slit between two pole copies. The south pole's copies come from `sin(π)`
 /// (about 1.2e-16, not 0), so they differ by rounding and do not weld by position. Positions
@@ -233,7 +233,6 @@ fn sphere_with_rounded_pole_copies(n: u32, m: u32) -> MeshInput {
         for i in 0..=n {
             let (u, v) = (f64::from(i) / f64::from(n), f64::from(j) / f64::from(m));
             let (theta, phi) = (std::f64::consts::PI * v, 2.0 * std::f64::consts::PI * u);
-            // In `f32`, as a glTF file holds them.
             positions_m.push(
                 [
                     theta.sin() * phi.cos(),
