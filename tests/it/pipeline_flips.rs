@@ -221,8 +221,9 @@ proptest! {
         );
         prop_assert_eq!((flipped, deg_uv_3d), (0, 0), "stats {:?}", atlas.stats);
         // The padding and the sampled overlap hold too. (Exact overlaps are not asserted here:
-        // 256 cases found a cross-chart pair on a cylinder with needles, a bowtie and a
-        // duplicated face, also before the near-coincident weld.)
+        // 256 cases found pairs, also before the near-coincident weld. The shrunk case, a
+        // cylinder with needles, a bowtie and a duplicated face, has a needle whose apex,
+        // 1e-5 from a corner, ends 2e-6 inside the next face of its chart after the UV guard.)
         prop_assert_eq!(atlas.report.padding.violation_texels, 0, "stats {:?}", atlas.stats);
         prop_assert_eq!(atlas.report.overlap.sampled.overlapping_texels, 0);
     }
