@@ -3,10 +3,10 @@
 //! A chart made only of faces with zero area or a repeated vertex covers nothing in 3-D, so it
 //! must cover nothing in UV: its corners take the UV (and page) of a vertex of a packed chart
 //! at the bit-identical position in the same glTF mesh (weld group), or the page origin when
-//! there is none. A corner whose source vertex a packed chart also uses matches by that
-//! vertex's position (it differs from the corner's own when the weld joined near-coincident
-//! copies), so the face shares its UV edges with the packed faces around it. Its UV image is then a point or a segment: zero UV area, never a flip, never
-//! an overlap. Deterministic (sorted keys, ties to the lowest chart).
+//! there is none (a vertex's position, which is its welded group's when the weld joined
+//! near-coincident copies: the face then shares its UV edges with the packed faces around it).
+//! Its UV image is then a point or a segment: zero UV area, never a flip, never an overlap.
+//! Deterministic (sorted keys, ties to the lowest chart).
 
 use crate::mesh::{TriangleMesh, VertexId};
 
@@ -52,33 +52,6 @@ pub(super) fn place_degenerate(
     }
     known.sort_by_key(|a| (a.0, a.1));
     known.dedup_by(|a, b| (a.0, a.1) == (b.0, b.1));
-    // Per source vertex used by a packed chart, the key of its vertex there: a source joined to
-    // a near-coincident copy (the weld rule of `crate::mesh`) sits at that copy's position in
-    // the packed charts, and at its own in an isolated degenerate face. Only then can the keys
-    // of a corner and of its vertex differ, so only then is this list needed.
-    let mut by_source: Vec<(u32, Key)> = if mesh.has_moved_sources() {
-        charts
-            .iter()
-            .zip(degenerate)
-            .filter(|(_, &d)| !d)
-            .flat_map(|(faces, _)| faces.iter())
-            .flat_map(|&f| {
-                let vs = mesh.face_vertices(f);
-                (0..3).map(move |k| (mesh.corner_source(f.corner(k)), key(vs[k])))
-            })
-            .collect()
-    } else {
-        Vec::new()
-    };
-    by_source.sort_unstable();
-    by_source.dedup_by_key(|e| e.0);
-    let corner_key = |f: crate::mesh::FaceId, k: usize| -> Key {
-        let s = mesh.corner_source(f.corner(k));
-        match by_source.binary_search_by_key(&s, |e| e.0) {
-            Ok(j) => by_source[j].1,
-            Err(_) => key(mesh.face_vertices(f)[k]),
-        }
-    };
     // The lowest chart at `k`, or the entry of chart `c` at `k`.
     let first_at = |k: &Key| {
         let j = known.partition_point(|e| e.0 < *k);
@@ -96,7 +69,7 @@ pub(super) fn place_degenerate(
         }
         let mut page = None;
         for &f in faces {
-            let keys = [0, 1, 2].map(|k| corner_key(f, k));
+            let keys = mesh.face_vertices(f).map(key);
             let Some(&(_, chart, p, uv0)) = keys.iter().find_map(first_at) else {
                 corner_uvs[f.index()] = [[0.0; 2]; 3];
                 face_page[f.index()] = 0;

@@ -141,9 +141,8 @@ pub struct Atlas {
 /// Degenerate faces: a chart made only of faces with zero area or a repeated vertex (the mesh
 /// builder isolates the latter, so each arrives as a chart of its own) is not packed: it covers
 /// nothing in 3-D, so it must cover nothing in UV. Each of its corners takes the UV (and page) of
-/// a vertex of a packed chart at the bit-identical position in the same glTF mesh (the position
-/// of the packed vertex of the same source vertex, when there is one), or the page origin when
-/// there is none; its UV image is then a point or a segment (zero UV area: never a
+/// a vertex of a packed chart at the bit-identical position in the same glTF mesh, or the page
+/// origin when there is none; its UV image is then a point or a segment (zero UV area: never a
 /// flip, never an overlap), and a face lying along an edge of a packed chart joins that chart.
 ///
 /// Progress is reported per stage through `progress`, which can cancel at every checkpoint

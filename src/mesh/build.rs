@@ -52,8 +52,8 @@ pub struct BuiltMesh {
     pub defects: Vec<MeshDefect>,
     /// Number of distinct welded vertices (used source vertices after welding by position and
     /// group, and after the joins of near-coincident ends of zero-area faces), before repair
-    /// splits and isolated-face copies. `mesh.num_vertices()` is at least
-    /// this on a mesh without repeated-vertex faces.
+    /// splits and isolated-face copies. `mesh.num_vertices()` is at least this on a mesh without
+    /// repeated-vertex faces.
     pub num_welded_vertices: usize,
 }
 
@@ -373,7 +373,14 @@ impl TriangleMesh {
             let (src, first) = ((k >> 32) as usize, (k & 0xffff_ffff) as usize);
             let fan = fan_of[first] as usize;
             rank[fan] = r as u32;
-            positions_m.push(pos[src]);
+            // After joins, every vertex sits at its welded group's position (that of its
+            // lowest source), isolated corners too, so that equal positions still mean one
+            // welded point; each corner keeps its own in `moved_sources`.
+            positions_m.push(if joined {
+                pos[wv[first] as usize]
+            } else {
+                pos[src]
+            });
             vertex_source.push(src as u32);
             vertex_weld_group.push(input.weld_group[src]);
             vertex_halfedge.push(HalfedgeId(fan_start[fan]));

@@ -19,9 +19,9 @@
 //! `sin(π) ≈ 1.2e-16`); without the join the faces around the copies meet only through the slits,
 //! their chart flattens each copy apart, and the written atlas splits there into pieces that
 //! keep no padding between them. The asset's positions are never changed: only the connectivity
-//! the pipeline works on. A joined vertex sits at its lowest source's position, and each corner
-//! keeps its own ([`TriangleMesh::corner_position`]), by which the report keys corners as the
-//! evaluator does.
+//! the pipeline works on. Every vertex of a joined group, the copies in isolated faces too, sits
+//! at the group's position (its lowest source's), and each corner keeps its own
+//! ([`TriangleMesh::corner_position`]), by which the report keys corners as the evaluator does.
 //!
 //! # Repair policy
 //! Fatal (a [`MeshBuildError`], nothing built): zero triangles, `weld_group` length mismatch,
