@@ -52,15 +52,13 @@ pub use options::AtlasOptions;
 pub use pack::{pack_charts, PackChart, PackError, PackOptions, TexelDensity};
 pub use progress::{NoProgress, Progress, ProgressFn, Stage, StageProgress};
 
-use crate::mesh::TriangleMesh;
+use crate::mesh::{FaceId, TriangleMesh};
 use degenerate::place_degenerate;
 use pack_input::{pack_charts_of, pack_inputs, PackInputs};
 use packing_cuts::cut_for_packing;
 use parameterize::{parameterize_charts, ChartDefect};
 use segment::{segment_charts_with, SegmentMethod};
-use uv_guard::{
-    exact_folds, guard_uvs, restore_slivers, sampled_fold_faces, sampled_folds, split_off_faces,
-};
+use uv_guard::{folds, guard_uvs, restore_slivers, split_off, torn_parts};
 
 /// Counters of one [`generate`] run.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -254,8 +252,9 @@ pub fn generate(
         }
     }
     // Pack and write the `f32` corner UVs, then the last line of defence (`uv_guard.rs`):
-    // faults the guard cannot repair in place are split off into charts of their own and the
-    // charts packed again, at most `GUARD_SPLIT_ROUNDS` times.
+    // faults the guard cannot repair in place, and the parts of a chart that the output's
+    // connectivity tears apart, are split off into charts of their own and the charts packed
+    // again, at most `GUARD_SPLIT_ROUNDS` times.
     let mut parameterized = parameterized;
     let mut packing_of_cut_step = packing_of_cut_step;
     let mut round = 0;
@@ -278,37 +277,35 @@ pub fn generate(
             .map(|(_, c)| c.index() as u32)
             .collect();
         let size = [options.pack.width_texels, options.pack.height_texels];
-        let (face_page, num_pages) = (&written.face_page, written.packing.num_pages);
-        let moved = restore_slivers(mesh, &check, &mut written.corner_uvs, size, &|uvs| {
-            sampled_fold_faces(uvs, face_page, num_pages, size, &face_chart)
-        });
-        stats.uv_nudged_vertices += moved;
-        let mut faults = outcome.unrepaired;
-        if faults.is_empty() && round < GUARD_SPLIT_ROUNDS {
-            faults = sampled_folds(
+        let mut slivers = restore_slivers(mesh, &check, &mut written.corner_uvs, size);
+        let single = |faces: Vec<FaceId>| -> Vec<Vec<FaceId>> {
+            faces.into_iter().map(|f| vec![f]).collect()
+        };
+        let mut faults = single(outcome.unrepaired);
+        if faults.is_empty() || round == GUARD_SPLIT_ROUNDS {
+            // In the last round too, for the sliver moves at an overlap to be undone.
+            let (overlapping, exact) = folds(
                 mesh,
-                &written.corner_uvs,
-                &written.face_page,
-                written.packing.num_pages,
+                &mut written.corner_uvs,
+                (&written.face_page, written.packing.num_pages),
                 size,
                 &face_chart,
+                &mut slivers,
             );
+            if faults.is_empty() {
+                faults = single(overlapping);
+            }
+            exact_found = exact;
         }
-        if faults.is_empty() && round < GUARD_SPLIT_ROUNDS {
-            let (folds, exact) = exact_folds(
-                mesh,
-                &written.corner_uvs,
-                &written.face_page,
-                written.packing.num_pages,
-                &face_chart,
-            );
-            faults = folds;
-            // The UVs the report measures, when nothing is split off: it reuses the search.
-            exact_found = Some(exact);
+        if faults.is_empty() {
+            faults = torn_parts(mesh, &check, &face_chart);
         }
+        let moved = slivers.vertices_moved();
+        stats.uv_nudged_vertices += moved;
         if faults.is_empty() || round == GUARD_SPLIT_ROUNDS {
             // The report reuses the guard's searches on these UVs: its exact overlaps, and its
-            // orientation check unless the sliver repair moved a vertex since.
+            // orientation check unless the sliver repair moved a vertex since (undone moves
+            // put every corner back, bit for bit).
             let check = (moved == 0).then_some(check);
             let reuse = measure::Reuse {
                 exact: exact_found,
@@ -316,8 +313,8 @@ pub fn generate(
             };
             break (written, parameterized.segmentation.charts, reuse);
         }
-        stats.uv_guard_splits += faults.len();
-        parameterized = split_off_faces(mesh, &parameterized, &faults, options)?;
+        stats.uv_guard_splits += faults.iter().map(Vec::len).sum::<usize>();
+        parameterized = split_off(mesh, &parameterized, &faults, options)?;
         round += 1;
     };
     let Written {
@@ -366,9 +363,10 @@ pub fn generate(
 }
 
 /// Splits of the last line of defence (`uv_guard.rs`) before the pipeline gives up and lets
-/// the report show what is left. One round always suffices in practice (a single-face chart
-/// cannot be flipped); the bound only caps the cost of a pathological input.
-const GUARD_SPLIT_ROUNDS: usize = 2;
+/// the report show what is left. Each round packs again, which rounds every chart anew: a
+/// cylinder with three needles 1e-7 long needed three rounds, one needle each (4,096 generated
+/// defective meshes needed at most that); the bound caps the cost of a pathological input.
+const GUARD_SPLIT_ROUNDS: usize = 4;
 
 /// The written UVs of one packing.
 struct Written {

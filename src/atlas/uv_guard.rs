@@ -15,9 +15,11 @@
 //!
 //! [`guard_uvs`] checks the UVs with the report's own rules (`measure::orientation_check`, the
 //! definitions of the report and the evaluator) and repairs, in this order:
-//! 1. **collapse:** a 3-D-degenerate face with UV area gets two equal corners (the corner
-//!    off its longest 3-D edge takes the UV of the nearer end of that edge): `A2` is exactly 0,
-//!    only that face changes, and its long edge stays shared with its neighbour;
+//! 1. **collapse:** a 3-D-degenerate face with three distinct UV corners (a UV area, or a
+//!    segment that a raster's fixed-point rounding can give area) gets two equal corners (the
+//!    corner off its longest 3-D edge takes the UV of the nearer end of that edge): `A2` is
+//!    exactly 0 at any rounding, only that face changes, and its long edge stays shared with
+//!    its neighbour;
 //! 2. **nudge:** for a flipped or UV-degenerate face with 3-D area, one of its UV vertices (all
 //!    the corners with its key: glTF mesh, position, page, UV) moves along the normal of the
 //!    opposite UV edge, towards its chart's orientation, by 1, 2, 4, … up to
@@ -28,16 +30,15 @@
 //!    corner moved off the others (along ±u or ±v, the other faces at it staying fine);
 //! 3. what is left is returned, for `generate` to split each such face off into a chart of its
 //!    own and pack again (a single-face chart is never flipped: its orientation is its own);
-//!    so are the faces that [`sampled_folds`] finds covering a texel centre of another face of
-//!    their chart by the report's own sampling (a sliver thinner than the raster's rounding),
-//!    and then those that [`exact_folds`] finds crossing another face of their chart by the
-//!    report's exact test: alone, a face keeps the padding from every other chart;
+//!    so are, after step 4, the faces that [`folds`] finds covering a texel centre of another
+//!    face of their chart by the report's own sampling (a sliver thinner than the raster's
+//!    rounding), or else crossing another face of their chart by the report's exact test:
+//!    alone, a face keeps the padding from every other chart;
 //! 4. slivers whose UV height the rounding set far from their 3-D height get their apex moved
 //!    back (`slivers.rs`, [`restore_slivers`]), and where that is not enough one base vertex
 //!    with it: the one step that moves a corner of a face that is not flipped or degenerate,
-//!    by at most 16 spacings, at the vertices of faces thinner than 1/16 texel; a base move
-//!    after which a face at its vertices covers a texel centre of another face of its chart is
-//!    undone.
+//!    by at most 16 spacings, at the vertices of faces thinner than 1/16 texel; [`folds`]
+//!    undoes every such move at a face that then overlaps another, before it splits anything.
 //!
 //! # Invariants
 //! Pure and deterministic: faces and vertices are visited in index order; no hashing. Steps 1–3
@@ -55,7 +56,7 @@ use super::measure::{exact_overlaps, orientation_check, ExactOverlaps, Orientati
 use crate::mesh::{FaceId, TriangleMesh};
 
 mod slivers;
-pub(super) use slivers::restore_slivers;
+pub(super) use slivers::{restore_slivers, SliverMoves};
 
 /// The largest nudge, in `f32` spacings at the vertex (2⁸: see the module doc).
 pub(super) const NUDGE_MAX_ULPS: u32 = 256;
@@ -81,12 +82,12 @@ pub(super) fn guard_uvs(
 ) -> (GuardOutcome, OrientationCheck) {
     let mut out = GuardOutcome::default();
     let check = orientation_check(mesh, corner_uvs, face_page);
-    if !(0..corner_uvs.len()).any(|f| check.fault(f)) {
+    let open = |f: usize| check.degenerate_3d[f] && !two_equal(&corner_uvs[f]);
+    if !(0..corner_uvs.len()).any(|f| check.fault(f) || open(f)) {
         return (out, check);
     }
-    // 1. Collapse 3-D-degenerate faces with UV area (changes no other face).
-    let shared = if (0..corner_uvs.len()).any(|f| check.degenerate_3d[f] && !check.uv_degenerate[f])
-    {
+    // 1. Collapse 3-D-degenerate faces with three distinct UV corners (changes no other face).
+    let shared = if (0..corner_uvs.len()).any(open) {
         SharedEdges::of(&check)
     } else {
         SharedEdges::default()
@@ -132,7 +133,11 @@ pub(super) fn guard_uvs(
     (out, check)
 }
 
-/// Collapses every face marked in `degenerate_3d` whose UV triangle has area; returns how many.
+/// Collapses every face marked in `degenerate_3d` whose three UV corners are distinct; returns
+/// how many. Such a face with UV area breaks the flip rules; one whose corners are collinear
+/// (its lone vertex put on its UV segment) does not, but a raster's fixed-point rounding can
+/// give it area, and two such faces on one segment (a zero-area face and its duplicate) then
+/// cover a common texel centre.
 fn collapse_all(
     mesh: &TriangleMesh,
     degenerate_3d: &[bool],
@@ -141,12 +146,17 @@ fn collapse_all(
 ) -> usize {
     let mut n = 0;
     for (f, uv) in corner_uvs.iter_mut().enumerate() {
-        if degenerate_3d[f] && !signed_area(uv).1 {
+        if degenerate_3d[f] && !two_equal(uv) {
             collapse(mesh, f, shared, uv);
             n += 1;
         }
     }
     n
+}
+
+/// Two of the three UV corners are equal (bit for bit, `-0.0 == 0.0`).
+fn two_equal(uv: &[[f32; 2]; 3]) -> bool {
+    uv[0] == uv[1] || uv[1] == uv[2] || uv[2] == uv[0]
 }
 
 /// Two equal corners for the 3-D-degenerate face `f`: it keeps one edge, the longest (in 3-D)
@@ -374,44 +384,57 @@ fn nudge(
     first_fine_move(check, group, corner_uvs, (c, n), usize::MAX, |_| true)
 }
 
-/// Faces of one chart that cover a common texel centre by the report's own sampling (the
-/// evaluator's fixed-point raster, `measure::sampled_same_chart_pairs`): of each such pair,
-/// the face of smaller 3-D area (ties: the higher index), ascending, for the caller to split
-/// off (step 3). Validated `f64` maps do not overlap, but a 3-D sliver whose UV height is
-/// below the raster's rounding (craft_speederD: 1e-5 texels) can cross its neighbour there.
+/// Faces of one chart that overlap, for the caller to split off (step 3), once the sliver
+/// moves (step 4) at an overlap are undone. First the pairs that cover a common texel centre by
+/// the report's own sampling (the evaluator's fixed-point raster,
+/// `measure::sampled_same_chart_pairs`): of each, the face of smaller 3-D area (ties: the higher
+/// index). Validated `f64` maps do not overlap, but a 3-D sliver whose UV height is below the
+/// raster's rounding (craft_speederD: 1e-5 texels) can cross its neighbour there. When there
+/// are none, the pairs whose open UV triangles intersect by the report's exact test
+/// (`measure::exact_overlaps`): a few faces that meet every such pair ([`cover_of_pairs`]:
+/// each split-off face is one more chart to pack). A chart's border that comes back on itself
+/// across a cut-out strip (craft_speederD: two border edges 3e-5 texels apart, a cut-out quad
+/// between them in 3-D) is valid in `f64` and crosses itself once rounded to `f32`: one face
+/// there crosses two.
+///
+/// Whenever a pair (of any chart, for the exact test) has a face at a kept sliver move, those
+/// moves are undone and the UVs looked at again: a fix of rounding is worth less than a chart.
+/// Returns the faces (ascending) and, when the search got that far, the exact overlaps of
+/// `corner_uvs` as they leave, for the report to reuse when these UVs are the final ones.
 /// `face_chart` is the pipeline's chart of each face; `size = [W, H]` texels.
-pub(super) fn sampled_folds(
+pub(super) fn folds(
     mesh: &TriangleMesh,
-    corner_uvs: &[[[f32; 2]; 3]],
-    face_page: &[u32],
-    num_pages: u32,
+    corner_uvs: &mut [[[f32; 2]; 3]],
+    (face_page, num_pages): (&[u32], u32),
     size: [u32; 2],
     face_chart: &[u32],
-) -> Vec<FaceId> {
-    let pairs = super::measure::sampled_same_chart_pairs(
-        corner_uvs, face_page, num_pages, size, face_chart,
-    );
-    smaller_of_pairs(mesh, pairs)
+    slivers: &mut SliverMoves,
+) -> (Vec<FaceId>, Option<ExactOverlaps>) {
+    loop {
+        let sampled = super::measure::sampled_same_chart_pairs(
+            corner_uvs, face_page, num_pages, size, face_chart,
+        );
+        if !sampled.is_empty() {
+            if slivers.undo_at(&faces_of(&sampled), corner_uvs) > 0 {
+                continue;
+            }
+            return (smaller_of_pairs(mesh, sampled), None);
+        }
+        let exact = exact_overlaps(corner_uvs, face_page, num_pages);
+        if slivers.undo_at(&exact.faces(), corner_uvs) > 0 {
+            continue;
+        }
+        let faces = cover_of_pairs(mesh, &exact.same_chart(face_chart));
+        return (faces, Some(exact));
+    }
 }
 
-/// Faces of one chart whose open UV triangles intersect by the report's exact test
-/// (`measure::exact_overlaps`) though they cover no common texel centre, for the caller
-/// to split off (step 3), as [`sampled_folds`]: a few faces that meet every such pair
-/// ([`cover_of_pairs`]: each split-off face is one more chart to pack), ascending. A chart's
-/// border that comes back on itself across a cut-out strip (craft_speederD: two border edges
-/// 3e-5 texels apart, a cut-out quad between them in 3-D) is valid in `f64` and crosses itself
-/// once rounded to `f32`: one face there crosses two. Also returns the exact overlap pairs
-/// found, for the report to reuse when these UVs are the final ones.
-pub(super) fn exact_folds(
-    mesh: &TriangleMesh,
-    corner_uvs: &[[[f32; 2]; 3]],
-    face_page: &[u32],
-    num_pages: u32,
-    face_chart: &[u32],
-) -> (Vec<FaceId>, ExactOverlaps) {
-    let exact = exact_overlaps(corner_uvs, face_page, num_pages);
-    let faces = cover_of_pairs(mesh, &exact.same_chart(face_chart));
-    (faces, exact)
+/// Both faces of every pair, ascending, once each.
+fn faces_of(pairs: &[(u32, u32)]) -> Vec<u32> {
+    let mut faces: Vec<u32> = pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
+    faces.sort_unstable();
+    faces.dedup();
+    faces
 }
 
 /// Faces that meet every pair of `pairs`, chosen greedily: the face in the most pairs not met
@@ -510,48 +533,103 @@ fn smaller_of_pairs(mesh: &TriangleMesh, pairs: Vec<(u32, u32)>) -> Vec<FaceId> 
     faces
 }
 
-/// Both faces of every pair of [`sampled_folds`], as face indices, ascending.
-pub(super) fn sampled_fold_faces(
-    corner_uvs: &[[[f32; 2]; 3]],
-    face_page: &[u32],
-    num_pages: u32,
-    size: [u32; 2],
+/// The parts of a chart that the output's connectivity tears apart (the report's charts: faces
+/// joined by a UV edge with the same corner keys, `check.chart_of_face`). A chart flattened as
+/// one piece can meet itself, in the file, only through a vertex that the weld joined to a
+/// near-coincident copy (`TriangleMesh::corner_position`: a needle's end 2e-15 from a corner),
+/// or through a degenerate face that the collapse cut; its parts then lie side by side in UV
+/// with no padding between them. Of each torn chart, every part but the one of largest 3-D area
+/// (ties: the lowest report chart) is returned, faces ascending, for the caller to split off as
+/// a chart of its own. Faces degenerate in 3-D (`check.degenerate_3d`) cover no texel and are
+/// left out. `face_chart` is the pipeline's chart of each face. Deterministic: one sort.
+pub(super) fn torn_parts(
+    mesh: &TriangleMesh,
+    check: &OrientationCheck,
     face_chart: &[u32],
-) -> Vec<u32> {
-    let pairs = super::measure::sampled_same_chart_pairs(
-        corner_uvs, face_page, num_pages, size, face_chart,
-    );
-    let mut faces: Vec<u32> = pairs.into_iter().flat_map(|(a, b)| [a, b]).collect();
-    faces.sort_unstable();
-    faces.dedup();
-    faces
+) -> Vec<Vec<FaceId>> {
+    // The usual case, in one pass: every chart is one report chart.
+    let charts = face_chart
+        .iter()
+        .map(|&c| c as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut first = vec![u32::MAX; charts];
+    let torn = (0..face_chart.len())
+        .filter(|&f| !check.degenerate_3d[f])
+        .any(|f| {
+            let seen = &mut first[face_chart[f] as usize];
+            if *seen == u32::MAX {
+                *seen = check.chart_of_face[f];
+            }
+            *seen != check.chart_of_face[f]
+        });
+    if !torn {
+        return Vec::new();
+    }
+    let mut items: Vec<(u32, u32, u32)> = (0..face_chart.len())
+        .filter(|&f| !check.degenerate_3d[f])
+        .map(|f| (face_chart[f], check.chart_of_face[f], f as u32))
+        .collect();
+    items.sort_unstable();
+    let mut out = Vec::new();
+    for chart in items.chunk_by(|a, b| a.0 == b.0) {
+        let parts: Vec<&[(u32, u32, u32)]> = chart.chunk_by(|a, b| a.1 == b.1).collect();
+        if parts.len() < 2 {
+            continue;
+        }
+        let area = |part: &[(u32, u32, u32)]| -> f64 {
+            part.iter().map(|x| mesh.face_area_m2(FaceId(x.2))).sum()
+        };
+        let keep = (0..parts.len())
+            .max_by(|&i, &j| area(parts[i]).total_cmp(&area(parts[j])).then(j.cmp(&i)))
+            .unwrap_or(0);
+        for (i, part) in parts.iter().enumerate() {
+            if i != keep {
+                out.push(part.iter().map(|x| FaceId(x.2)).collect());
+            }
+        }
+    }
+    out
 }
 
-/// `validated` with each face of `faults` (ascending) split off its chart into a chart of its
-/// own, the rest of that chart cut into disks (`segment::enforce_disks`), validated again
-/// without merge-back (so the single faces stay apart). Step 3 of the module doc; the caller
-/// packs again.
-pub(super) fn split_off_faces(
+/// `validated` with each group of `groups` (faces ascending, each group within one chart)
+/// split off its chart into a chart of its own (cut into disks, `segment::enforce_disks`), the
+/// rest of that chart cut into disks too, validated again without merge-back (so the parts
+/// stay apart). Step 3 of the module doc, and [`torn_parts`]; the caller packs again.
+pub(super) fn split_off(
     mesh: &TriangleMesh,
     validated: &super::parameterize::ParameterizedCharts,
-    faults: &[FaceId],
+    groups: &[Vec<FaceId>],
     options: &super::AtlasOptions,
 ) -> Result<super::parameterize::ParameterizedCharts, super::AtlasError> {
     use super::progress::{Stage, StageProgress};
     use super::{parameterize, segment};
     let charts = &validated.segmentation.charts;
     let mut stats = validated.segmentation.stats;
-    let mut proposed: Vec<Vec<FaceId>> = Vec::with_capacity(charts.len() + faults.len());
+    let mut group_of = vec![u32::MAX; mesh.num_faces()];
+    for (g, faces) in groups.iter().enumerate() {
+        for f in faces {
+            group_of[f.index()] = g as u32;
+        }
+    }
+    let mut proposed: Vec<Vec<FaceId>> = Vec::with_capacity(charts.len() + groups.len());
     for faces in charts {
-        if !faces.iter().any(|f| faults.binary_search(f).is_ok()) {
+        if faces.iter().all(|f| group_of[f.index()] == u32::MAX) {
             proposed.push(faces.clone());
             continue;
         }
-        let (alone, rest): (Vec<FaceId>, Vec<FaceId>) =
-            faces.iter().partition(|f| faults.binary_search(f).is_ok());
-        proposed.extend(alone.into_iter().map(|f| vec![f]));
-        if !rest.is_empty() {
-            proposed.extend(segment::enforce_disks(mesh, vec![rest], &mut stats));
+        // The chart's faces by group (the rest under u32::MAX, last), in face order.
+        let mut by_group: Vec<(u32, FaceId)> =
+            faces.iter().map(|&f| (group_of[f.index()], f)).collect();
+        by_group.sort_unstable();
+        for part in by_group.chunk_by(|a, b| a.0 == b.0) {
+            let group = part[0].0;
+            let part: Vec<FaceId> = part.iter().map(|x| x.1).collect();
+            if group != u32::MAX && part.len() == 1 {
+                proposed.push(part);
+            } else {
+                proposed.extend(segment::enforce_disks(mesh, vec![part], &mut stats));
+            }
         }
     }
     let seg = segment::finish(mesh, proposed, stats);
@@ -573,7 +651,7 @@ mod tests {
     use crate::mesh::MeshInput;
 
     #[test]
-    fn sampled_folds_picks_the_smaller_face_of_a_fold_and_nothing_elsewhere() {
+    fn folds_pick_the_smaller_face_of_a_sampled_fold_and_nothing_elsewhere() {
         // Two faces sharing the edge (4,0)-(0,4): face 0 of area 8, face 1 of area 4.
         let mesh = build(&MeshInput::single_group(
             vec![
@@ -586,14 +664,23 @@ mod tests {
         ));
         assert!(mesh.face_area_m2(FaceId(1)) < mesh.face_area_m2(FaceId(0)));
         let face0 = [[0.1f32, 0.1], [0.5, 0.1], [0.1, 0.5]];
-        let folds = |apex: [f32; 2]| {
-            let corner_uvs = [face0, [[0.5, 0.1], apex, [0.1, 0.5]]];
-            sampled_folds(&mesh, &corner_uvs, &[0, 0], 1, [64, 64], &[0, 0])
+        let split_off = |apex: [f32; 2]| {
+            let mut corner_uvs = [face0, [[0.5, 0.1], apex, [0.1, 0.5]]];
+            let mut none = SliverMoves::default();
+            folds(
+                &mesh,
+                &mut corner_uvs,
+                (&[0, 0], 1),
+                [64, 64],
+                &[0, 0],
+                &mut none,
+            )
+            .0
         };
         // Face 1 folded back over face 0: it covers face 0's texel centres.
-        assert_eq!(folds([0.2, 0.2]), vec![FaceId(1)]);
+        assert_eq!(split_off([0.2, 0.2]), vec![FaceId(1)]);
         // Unfolded, on the other side of the shared edge: nothing.
-        assert!(folds([0.45, 0.45]).is_empty());
+        assert!(split_off([0.45, 0.45]).is_empty());
     }
 
     #[test]
@@ -623,7 +710,7 @@ mod tests {
     }
 
     #[test]
-    fn exact_folds_split_off_a_crossing_the_raster_misses_with_the_fewest_faces() {
+    fn folds_split_off_a_crossing_the_raster_misses_with_the_fewest_faces() {
         // A chart's border coming back on itself by 1e-4 texel: no texel centre is covered
         // twice, but the open triangles intersect.
         let mesh = build(&MeshInput::single_group(
@@ -654,18 +741,47 @@ mod tests {
             assert!(area > 0.0, "test premise: every face is counter-clockwise");
         }
         let (pages, chart) = (&[0, 0, 0], &[0, 0, 0]);
-        assert!(
-            sampled_folds(&mesh, &corner_uvs, pages, 1, [64, 64], chart).is_empty(),
-            "test premise: the raster sees no fold"
-        );
-        let (faces, exact) = exact_folds(&mesh, &corner_uvs, pages, 1, chart);
+        let mut uvs = corner_uvs;
+        let mut none = SliverMoves::default();
+        let (faces, exact) = folds(&mesh, &mut uvs, (pages, 1), [64, 64], chart, &mut none);
+        let exact = exact.expect("test premise: the raster sees no fold, so the exact test ran");
         let pairs = exact.same_chart(chart);
         assert_eq!(pairs, vec![(0, 1), (0, 2)]);
         // One face meets both pairs: face 0, not the two smaller ones.
         assert_eq!(faces, vec![FaceId(0)]);
         // In two charts, the crossing is not a fold of a chart: nothing to split off.
-        let (faces, _) = exact_folds(&mesh, &corner_uvs, pages, 1, &[0, 1, 1]);
+        let (faces, _) = folds(&mesh, &mut uvs, (pages, 1), [64, 64], &[0, 1, 1], &mut none);
         assert!(faces.is_empty());
+    }
+
+    #[test]
+    fn torn_parts_are_the_smaller_parts_of_a_chart_the_output_does_not_join() {
+        // Three faces in a row (0–1 share edge 1-2, 1–2 share edge 2-3), all in chart 0.
+        let mesh = build(&MeshInput::single_group(
+            vec![
+                [0.0, 0.0, 0.0],
+                [2.0, 0.0, 0.0],
+                [0.0, 2.0, 0.0],
+                [2.0, 2.0, 0.0],
+                [3.0, 3.0, 0.0],
+            ],
+            vec![[0, 1, 2], [1, 3, 2], [2, 3, 4]],
+        ));
+        let p = |v: [f64; 3]| [(0.1 + 0.1 * v[0]) as f32, (0.1 + 0.1 * v[1]) as f32];
+        let mut uvs: Vec<[[f32; 2]; 3]> = (0..3)
+            .map(|f| mesh.face_positions(FaceId(f)).map(p))
+            .collect();
+        let torn = |uvs: &[[[f32; 2]; 3]], face_chart: &[u32]| {
+            let check = orientation_check(&mesh, uvs, &[0, 0, 0]);
+            torn_parts(&mesh, &check, face_chart)
+        };
+        assert!(torn(&uvs, &[0, 0, 0]).is_empty(), "one piece");
+        // Face 2's copy of vertex 3 one spacing off: in the output, face 2 meets the rest at
+        // vertex 2 only. It is the smaller part.
+        uvs[2][1][0] = f32::from_bits(uvs[2][1][0].to_bits() + 1);
+        assert_eq!(torn(&uvs, &[0, 0, 0]), vec![vec![FaceId(2)]]);
+        // Already a chart of its own: nothing torn.
+        assert!(torn(&uvs, &[0, 0, 1]).is_empty());
     }
 
     #[test]

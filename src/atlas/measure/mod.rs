@@ -495,6 +495,11 @@ impl ExactOverlaps {
     pub(crate) fn same_chart(&self, chart_of_face: &[u32]) -> Vec<(u32, u32)> {
         self.pairs.same_chart(chart_of_face)
     }
+
+    /// The faces in any pair, ascending, once each.
+    pub(crate) fn faces(&self) -> Vec<u32> {
+        self.pairs.faces()
+    }
 }
 
 /// Searches the exact overlap pairs of `corner_uvs` ([`ExactOverlaps`]). Pure and

@@ -144,6 +144,14 @@ impl ExactPairs {
         pairs
     }
 
+    /// The faces in any pair, ascending, once each.
+    pub(super) fn faces(&self) -> Vec<u32> {
+        let mut faces: Vec<u32> = self.pairs.iter().flatten().copied().collect();
+        faces.sort_unstable();
+        faces.dedup();
+        faces
+    }
+
     /// The report: counts by same or different chart, examples sorted.
     pub(super) fn classify(self, chart_of_face: &[u32]) -> ExactOverlap {
         let pairs = self.pairs.len() as u64;

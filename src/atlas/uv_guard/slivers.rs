@@ -19,8 +19,13 @@
 //! [`BASE_SEARCH_ABOVE_LINF`], one base vertex at a time is moved too ([`BASE_SEARCH_ULPS`]):
 //! each move shifts the apex's target against the `f32` grid by a fraction of a spacing, and
 //! the apex is tried at the `f32` points nearest that target. The faces at both vertices are
-//! measured and checked as for the apex alone; a base move after which one of them covers a
-//! texel centre of another face of its chart (the report's sampling) is undone.
+//! measured and checked as for the apex alone.
+//!
+//! Every move is a fix of rounding, worth less than a chart: [`restore_slivers`] returns its
+//! moves ([`SliverMoves`]), and the caller undoes those at a face that then covers a texel
+//! centre of another face of its chart or crosses one (the report's sampling and exact test),
+//! where `moves_fine`, which looks at orientation only, cannot see it (a needle's apex moved
+//! across the next face of its chart).
 use super::{f32_spacing, moves_fine, oriented, UvVertices};
 use crate::atlas::measure::{face_metric, OrientationCheck};
 use crate::mesh::{FaceId, TriangleMesh};
@@ -72,17 +77,15 @@ fn face_linf(mesh: &TriangleMesh, f: usize, uv: &[[f32; 2]; 3], k: f64) -> f64 {
 }
 
 /// Moves the apex of every thin face with a high L∞, then the base search on those still high
-/// (module doc); returns the UV vertices moved. `check` is `measure::orientation_check` of
-/// `corner_uvs` as they are on entry (the guard's last); `size = [W, H]` texels of a page;
-/// `folds(uvs)`: the faces (ascending) that cover a texel centre of another face of their chart
-/// ([`super::sampled_fold_faces`]), by which base moves are undone.
+/// (module doc); returns the moves, for the caller to undo those at a fold. `check` is
+/// `measure::orientation_check` of `corner_uvs` as they are on entry (the guard's last);
+/// `size = [W, H]` texels of a page.
 pub(in crate::atlas) fn restore_slivers(
     mesh: &TriangleMesh,
     check: &OrientationCheck,
     corner_uvs: &mut [[[f32; 2]; 3]],
     size: [u32; 2],
-    folds: &Folds,
-) -> usize {
+) -> SliverMoves {
     let nf = corner_uvs.len();
     let used = |f: usize| !check.uv_degenerate[f] && !check.degenerate_3d[f];
     let (mut a2_sum, mut a3_sum) = (0.0f64, 0.0f64);
@@ -91,12 +94,12 @@ pub(in crate::atlas) fn restore_slivers(
         a3_sum += mesh.face_area_m2(FaceId(f as u32));
     }
     let k = a2_sum / a3_sum;
+    let mut moves = SliverMoves::default();
     if !(k.is_finite() && k > 0.0) {
-        return 0;
+        return moves;
     }
     let texel = 1.0 / f64::from(size[0].max(size[1]).max(1));
     let mut vertices: Option<UvVertices> = None;
-    let mut moved = 0;
     // The thin faces still above BASE_SEARCH_ABOVE_LINF after their apex search, with their
     // apex.
     let mut still: Vec<(usize, usize)> = Vec::new();
@@ -153,49 +156,129 @@ pub(in crate::atlas) fn restore_slivers(
             }
         }
         if let Some((_, p)) = best {
-            for &corner in group {
-                corner_uvs[corner as usize / 3][corner as usize % 3] = p;
-            }
-            moved += 1;
+            moves.apply(corner_uvs, [(group, p)], false);
         }
         if face_linf(mesh, f, &corner_uvs[f], k) > BASE_SEARCH_ABOVE_LINF {
             still.push((f, apex));
         }
     }
     if let Some(vertices) = &vertices {
-        moved += restore_by_base(mesh, check, corner_uvs, vertices, (&still, k), folds);
+        restore_by_base(mesh, check, corner_uvs, vertices, (&still, k), &mut moves);
     }
-    moved
+    moves
 }
 
-/// `folds(corner_uvs)`: the faces (ascending) that cover a texel centre of another face of
-/// their chart by the report's sampling ([`super::sampled_fold_faces`]).
-pub(in crate::atlas) type Folds<'a> = dyn Fn(&[[[f32; 2]; 3]]) -> Vec<u32> + 'a;
+/// The moves of [`restore_slivers`], in the order made, each kept or undone.
+#[derive(Debug, Default)]
+pub(in crate::atlas) struct SliverMoves {
+    moves: Vec<SliverMove>,
+}
 
-/// One base search kept: the faces at its two vertices (ascending) and each moved corner's
-/// position before.
-struct BaseMove {
+/// One move: the faces at its vertices (ascending), each moved corner's position before,
+/// whether it is a base move (two vertices) and whether it has been undone.
+#[derive(Debug)]
+struct SliverMove {
     faces: Vec<u32>,
     before: Vec<(usize, [f32; 2])>,
+    base: bool,
+    undone: bool,
+}
+
+impl SliverMoves {
+    /// Moves every corner of each group to its position and records the move.
+    fn apply<'a>(
+        &mut self,
+        corner_uvs: &mut [[[f32; 2]; 3]],
+        groups: impl IntoIterator<Item = (&'a [u32], [f32; 2])>,
+        base: bool,
+    ) {
+        let (mut faces, mut before) = (Vec::new(), Vec::new());
+        for (group, at) in groups {
+            for &c in group {
+                let (g, j) = (c as usize / 3, c as usize % 3);
+                before.push((c as usize, corner_uvs[g][j]));
+                corner_uvs[g][j] = at;
+                faces.push(g as u32);
+            }
+        }
+        faces.sort_unstable();
+        faces.dedup();
+        self.moves.push(SliverMove {
+            faces,
+            before,
+            base,
+            undone: false,
+        });
+    }
+
+    /// UV vertices moved by the moves kept (one per apex move, two per base move).
+    pub(in crate::atlas) fn vertices_moved(&self) -> usize {
+        self.moves
+            .iter()
+            .filter(|m| !m.undone)
+            .map(|m| if m.base { 2 } else { 1 })
+            .sum()
+    }
+
+    /// Undoes every kept move with a face in `faces` (ascending), and every later kept move
+    /// that shares a face with an undone one (its checks saw the undone positions), latest
+    /// first, so that each corner gets back the position it had before; returns how many.
+    pub(in crate::atlas) fn undo_at(
+        &mut self,
+        faces: &[u32],
+        corner_uvs: &mut [[[f32; 2]; 3]],
+    ) -> usize {
+        self.undo_where(
+            |m| m.faces.iter().any(|f| faces.binary_search(f).is_ok()),
+            corner_uvs,
+        )
+    }
+
+    fn undo_where(
+        &mut self,
+        hit: impl Fn(&SliverMove) -> bool,
+        corner_uvs: &mut [[[f32; 2]; 3]],
+    ) -> usize {
+        let mut undone_faces: Vec<u32> = Vec::new();
+        let mut undo = Vec::new();
+        for (i, m) in self.moves.iter().enumerate() {
+            if m.undone {
+                continue;
+            }
+            if hit(m)
+                || m.faces
+                    .iter()
+                    .any(|f| undone_faces.binary_search(f).is_ok())
+            {
+                undone_faces.extend(&m.faces);
+                undone_faces.sort_unstable();
+                undone_faces.dedup();
+                undo.push(i);
+            }
+        }
+        for &i in undo.iter().rev() {
+            let m = &mut self.moves[i];
+            for &(c, at) in m.before.iter().rev() {
+                corner_uvs[c / 3][c % 3] = at;
+            }
+            m.undone = true;
+        }
+        undo.len()
+    }
 }
 
 /// The second pass of [`restore_slivers`]: the base search ([`search_base`]) on each thin face
 /// `still` above [`BASE_SEARCH_ABOVE_LINF`] after the first (with its apex corner;
 /// ascending), at most [`BASE_SEARCHES_MAX`]; `vertices` are the UV vertices of `corner_uvs`.
-/// Then a move
-/// whose faces `folds` finds covering a texel centre of another face of their chart (the
-/// report's sampling, which a sliver thinner than its rounding can cross) is undone, as is
-/// every later move that shares a face with an undone one (its checks saw the undone
-/// positions), in reverse order. Returns the UV vertices moved.
+/// Each move kept is recorded in `moves`.
 fn restore_by_base(
     mesh: &TriangleMesh,
     check: &OrientationCheck,
     corner_uvs: &mut [[[f32; 2]; 3]],
     vertices: &UvVertices,
     (still, k): (&[(usize, usize)], f64),
-    folds: &Folds,
-) -> usize {
-    let mut moves: Vec<BaseMove> = Vec::new();
+    moves: &mut SliverMoves,
+) {
     for &(f, apex) in still.iter().take(BASE_SEARCHES_MAX) {
         // An earlier move here may have changed it.
         if face_linf(mesh, f, &corner_uvs[f], k) <= BASE_SEARCH_ABOVE_LINF {
@@ -206,46 +289,12 @@ fn restore_by_base(
         else {
             continue;
         };
-        let mut faces = Vec::new();
-        let mut before = Vec::new();
-        for (corner, at) in [(base_corner, base_at), (3 * f + apex, apex_at)] {
-            for &c in vertices.group(corner) {
-                let (g, j) = (c as usize / 3, c as usize % 3);
-                before.push((c as usize, corner_uvs[g][j]));
-                corner_uvs[g][j] = at;
-                faces.push(g as u32);
-            }
-        }
-        faces.sort_unstable();
-        faces.dedup();
-        moves.push(BaseMove { faces, before });
+        let groups = [
+            (vertices.group(base_corner), base_at),
+            (vertices.group(3 * f + apex), apex_at),
+        ];
+        moves.apply(corner_uvs, groups, true);
     }
-    if moves.is_empty() {
-        return 0;
-    }
-    let folded = folds(corner_uvs);
-    let mut undone_faces: Vec<u32> = Vec::new();
-    let undo: Vec<bool> = moves
-        .iter()
-        .map(|m| {
-            let hit = m
-                .faces
-                .iter()
-                .any(|f| folded.binary_search(f).is_ok() || undone_faces.binary_search(f).is_ok());
-            if hit {
-                undone_faces.extend(&m.faces);
-                undone_faces.sort_unstable();
-                undone_faces.dedup();
-            }
-            hit
-        })
-        .collect();
-    for (m, _) in moves.iter().zip(&undo).rev().filter(|(_, &u)| u) {
-        for &(c, at) in m.before.iter().rev() {
-            corner_uvs[c / 3][c % 3] = at;
-        }
-    }
-    2 * undo.iter().filter(|&&u| !u).count()
 }
 
 /// The base search of the module doc for the sliver `f` with apex corner `apex`: the move of one
@@ -472,7 +521,7 @@ mod tests {
             "the setup is a sliver with a high L∞: {before}"
         );
         let check = orientation_check(&mesh, &uvs, &[0, 0]);
-        let moved = restore_slivers(&mesh, &check, &mut uvs, [64, 64], &|_| Vec::new());
+        let moved = restore_slivers(&mesh, &check, &mut uvs, [64, 64]).vertices_moved();
         let after = face_linf(&mesh, 0, &uvs[0], k);
         assert_eq!(moved, 1);
         assert!(after < before / 2.0, "L∞ {before} -> {after}");
@@ -492,9 +541,10 @@ mod tests {
         let (mesh, start, k) = sliver_beside_big_face(3.7, 2e-8, 2.0);
         let before = face_linf(&mesh, 0, &start[0], k);
         let check = orientation_check(&mesh, &start, &[0, 0]);
-        // The apex alone (a fold check that refuses every base move) leaves it above the bar.
+        // The apex alone (every base move undone) leaves it above the bar.
         let mut apex_only = start;
-        restore_slivers(&mesh, &check, &mut apex_only, [64, 64], &|_| vec![0, 1]);
+        restore_slivers(&mesh, &check, &mut apex_only, [64, 64])
+            .undo_where(|m| m.base, &mut apex_only);
         let apex_alone = face_linf(&mesh, 0, &apex_only[0], k);
         assert!(
             apex_alone > BASE_SEARCH_ABOVE_LINF,
@@ -507,9 +557,9 @@ mod tests {
         // With the base search kept: far lower, a base vertex moved by at most
         // BASE_SEARCH_ULPS spacings, both faces oriented as before.
         let mut uvs = start;
-        let moved = restore_slivers(&mesh, &check, &mut uvs, [64, 64], &|_| Vec::new());
+        let mut moves = restore_slivers(&mesh, &check, &mut uvs, [64, 64]);
         let after = face_linf(&mesh, 0, &uvs[0], k);
-        assert!(moved >= 2);
+        assert!(moves.vertices_moved() >= 2);
         assert!(after < apex_alone / 2.0, "L∞ {apex_alone} -> {after}");
         for (p, q) in uvs[0][..2].iter().zip(&start[0][..2]) {
             for axis in 0..2 {
@@ -521,5 +571,10 @@ mod tests {
         let check = orientation_check(&mesh, &uvs, &[0, 0]);
         assert!(!check.flipped(0) && !check.flipped(1));
         assert!(!check.uv_degenerate[0] && !check.uv_degenerate[1]);
+        // Undone at a fold of the sliver (in every move): every corner back where it was, bit
+        // for bit.
+        assert!(moves.undo_at(&[0], &mut uvs) >= 2);
+        assert_eq!(uvs, start);
+        assert_eq!(moves.vertices_moved(), 0);
     }
 }
