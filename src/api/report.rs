@@ -136,14 +136,15 @@ pub struct PipelineJson {
     pub charts_asp: usize,
     /// Charts that kept their LSCM map because the ASP map failed the validation bounds.
     pub charts_asp_kept_lscm: usize,
-    /// The flip promise's last line of defence: 3-D-degenerate faces whose written UV triangle
-    /// had area and was collapsed to a segment.
+    /// The flip promise's last line of defence: 3-D-degenerate faces whose written UV corners
+    /// were distinct and were collapsed to a segment (two equal corners).
     pub uv_collapsed_faces: usize,
     /// ... UV vertices moved by a few `f32` spacings to unflip a face with 3-D area, or to give a
     /// sliver back the UV height rounding took from it.
     pub uv_nudged_vertices: usize,
-    /// ... faces split off into a chart of their own, then packed again (no nudge repaired
-    /// them, or they covered a texel centre of another face of their chart).
+    /// ... faces split off their chart, then packed again: faces that no nudge repaired or that
+    /// overlapped another face of their chart (each into a chart of its own), and the parts of a
+    /// chart that the output's connectivity tore apart.
     pub uv_guard_splits: usize,
 }
 

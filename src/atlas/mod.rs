@@ -109,8 +109,9 @@ pub struct PipelineStats {
     /// ... UV vertices moved by a few `f32` spacings to unflip a face with 3-D area, or to give
     /// a sliver back the UV height rounding took from it (`uv_guard/slivers.rs`).
     pub uv_nudged_vertices: usize,
-    /// ... faces split off into a chart of their own (then packed again) because no nudge
-    /// repaired them or they covered a texel centre of another face of their chart.
+    /// ... faces split off their chart (then packed again): faces that no nudge repaired or that
+    /// overlapped another face of their chart (each into a chart of its own), and the parts of a
+    /// chart that the output's connectivity tore apart (`uv_guard::torn_parts`).
     pub uv_guard_splits: usize,
 }
 
