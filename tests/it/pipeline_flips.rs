@@ -198,18 +198,31 @@ fn defect() -> impl Strategy<Value = Defect> {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
 
-    /// Any base surface with up to 12 defects: 0 flips and 0 UV-degenerate faces with 3-D area,
-    /// by the report and by the recomputation; the report's counts equal the recomputation's;
-    /// no padding violation, no sampled and no exact overlap in the report.
+    /// Any base surface with up to 12 defects, drawn once or twice (a second glTF mesh on the
+    /// same positions, whose vertices do not weld to the first's): 0 flips and 0 UV-degenerate
+    /// faces with 3-D area, by the report and by the recomputation; the report's counts equal
+    /// the recomputation's; no padding violation, no sampled and no exact overlap in the report.
     #[test]
     fn defective_meshes_get_no_flips(
         kind in 0u8..3,
         n in 1u32..5,
         defects in prop::collection::vec(defect(), 1..12),
+        copies in 1u32..3,
     ) {
         let mut input = base(kind, n);
         for &d in &defects {
             apply(&mut input, d);
+        }
+        // A second glTF mesh (weld group) on the same positions: an instance drawn twice.
+        for copy in 1..copies {
+            let nv = input.positions_m.len() as u32;
+            let nt = input.triangles.len();
+            input.positions_m.extend_from_within(..nv as usize);
+            input.weld_group.extend(std::iter::repeat_n(copy, nv as usize));
+            for t in 0..nt {
+                let tri = input.triangles[t].map(|v| v + nv);
+                input.triangles.push(tri);
+            }
         }
         let mesh = TriangleMesh::build(&input).expect("builds").mesh;
         let atlas = generate(&mesh, &AtlasOptions::default(), &mut NoProgress)
