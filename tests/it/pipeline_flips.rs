@@ -8,7 +8,7 @@
 //! "degenerate", "Charts", "Orientation") with its own union-find over corner keys, not the
 //! crate's `measure` code.
 use proptest::prelude::*;
-use texatlas::atlas::{generate, AtlasOptions, NoProgress};
+use texatlas::atlas::{generate, AtlasError, AtlasOptions, NoProgress, PackError, TexelDensity};
 use texatlas::mesh::{fixtures, FaceId, MeshInput, TriangleMesh, VertexId};
 
 /// One defect applied to the soup: `kind`, the face it starts from (index modulo the current
@@ -415,4 +415,37 @@ fn a_zero_area_face_and_its_duplicate_are_collapsed_and_cover_no_texel() {
     );
     assert!(atlas.stats.uv_collapsed_faces >= 2, "{:?}", atlas.stats);
     assert_clean(&mesh, &atlas);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    /// The same promises over several pages: 256-texel pages at a fixed density that needs one
+    /// to three of them for these meshes (meshes with a chart larger than a page get the typed
+    /// error, and are skipped: about half of them at this density).
+    #[test]
+    fn defective_meshes_on_several_pages_keep_every_promise(
+        kind in 0u8..3,
+        n in 1u32..5,
+        defects in prop::collection::vec(defect(), 1..12),
+    ) {
+        let mut input = base(kind, n);
+        for &d in &defects {
+            apply(&mut input, d);
+        }
+        let mesh = TriangleMesh::build(&input).expect("builds").mesh;
+        let mut options = AtlasOptions::default();
+        options.pack.width_texels = 256;
+        options.pack.height_texels = 256;
+        options.pack.density = TexelDensity::TexelsPerUnit(90.0);
+        let atlas = match generate(&mesh, &options, &mut NoProgress) {
+            Ok(atlas) => atlas,
+            Err(AtlasError::Pack(PackError::ChartTooLarge { .. })) => return Ok(()),
+            Err(e) => panic!("{e}"),
+        };
+        prop_assert_eq!(recount(&mesh, &atlas.corner_uvs, &atlas.face_page), (0, 0));
+        prop_assert_eq!(atlas.report.padding.violation_texels, 0, "stats {:?}", atlas.stats);
+        prop_assert_eq!(atlas.report.overlap.sampled.overlapping_texels, 0);
+        prop_assert_eq!(atlas.report.overlap.exact.pairs, 0, "{:?}", atlas.report.overlap.exact);
+    }
 }
