@@ -42,8 +42,9 @@
 //!
 //! # Invariants
 //! Pure and deterministic: faces and vertices are visited in index order; no hashing. Steps 1–3
-//! never move a corner of a face that is not at fault or at a nudged vertex, so a valid atlas
-//! without slivers comes out bit-identical.
+//! never move a corner of a face that is not at fault (flipped, degenerate in only one of UV and
+//! 3-D, or 3-D-degenerate with three distinct UV corners) or at a nudged vertex, so a valid
+//! atlas without slivers comes out bit-identical.
 //!
 //! # Units
 //! UVs in normalized page coordinates (`f32`, as written to the file); `A2` in page units².
