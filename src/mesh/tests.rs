@@ -19,7 +19,8 @@ fn build_ok(input: &MeshInput) -> BuiltMesh {
 }
 
 /// Checks, without using the half-edge structure, that the mesh is the input: same faces in the
-/// same order, each corner at its source vertex's position, three distinct vertices per face.
+/// same order, each corner at its source vertex's position (its vertex there too, or at a joined
+/// copy's), three distinct vertices per face.
 fn check_against_input(input: &MeshInput, m: &TriangleMesh) {
     assert_eq!(m.check_invariants(), Ok(()));
     assert_eq!(m.num_faces(), input.triangles.len());
@@ -31,7 +32,18 @@ fn check_against_input(input: &MeshInput, m: &TriangleMesh) {
         for k in 0..3 {
             let c = f.corner(k);
             assert_eq!(m.corner_source(c), t[k]);
-            assert_eq!(z(m.position(vs[k])), z(input.positions_m[t[k] as usize]));
+            // Each corner keeps its own position. Its vertex sits at the same point, except
+            // where the weld joined near-coincident copies: then at the position of another
+            // source of its weld group (the group's lowest), never at a point of its own making.
+            let own = z(input.positions_m[t[k] as usize]);
+            assert_eq!(z(m.corner_position(c)), own, "corner {c} moved");
+            let at = z(m.position(vs[k]));
+            assert!(
+                at == own
+                    || (input.positions_m.iter().zip(&input.weld_group))
+                        .any(|(&p, &g)| g == input.weld_group[t[k] as usize] && z(p) == at),
+                "corner {c}'s vertex is at a point no source of its weld group has"
+            );
             assert_eq!(
                 input.weld_group[t[k] as usize],
                 m.vertex_weld_group(vs[k]),
