@@ -305,9 +305,13 @@ pub fn generate(
         stats.uv_nudged_vertices += moved;
         if faults.is_empty() || round == GUARD_SPLIT_ROUNDS {
             // The report reuses the guard's searches on these UVs: its exact overlaps, and its
-            // orientation check unless the sliver repair moved a vertex since (undone moves
-            // put every corner back, bit for bit).
-            let check = (moved == 0).then_some(check);
+            // orientation check, brought up to date where the sliver repair moved a vertex
+            // since (undone moves put every corner back, bit for bit).
+            let check = if moved == 0 {
+                Some(check)
+            } else {
+                check.after_uv_moves(&written.corner_uvs, &written.face_page, &slivers.faces())
+            };
             let reuse = measure::Reuse {
                 exact: exact_found,
                 check,

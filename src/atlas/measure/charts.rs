@@ -36,8 +36,12 @@ pub(super) struct Connectivity {
     /// hole).
     pub uv_boundary: Vec<bool>,
     /// Per corner `3f + k`: its corner key's id (glTF mesh, position, page and UV bits, `-0.0`
-    /// as `0.0`), numbered `0..unique_corners`.
+    /// as `0.0`), numbered `0..unique_corners`: by position id, then by (page, u, v) within
+    /// one position id.
     pub corner_id: Vec<u32>,
+    /// Per corner `3f + k`: the id of its (glTF mesh, position) key, numbered in the order of
+    /// the keys.
+    pub corner_pid: Vec<u32>,
 }
 
 /// Bit pattern with `-0.0` folded onto `0.0`, as a signed integer: position ids are then
@@ -51,7 +55,7 @@ fn fold64(x: f64) -> i64 {
     }
 }
 
-fn fold32(x: f32) -> u32 {
+pub(super) fn fold32(x: f32) -> u32 {
     if x == 0.0 {
         0
     } else {
@@ -331,5 +335,6 @@ pub(super) fn connectivity(
         open_border_length_3d_m: open,
         uv_boundary: uv_edge_unique,
         corner_id,
+        corner_pid,
     }
 }

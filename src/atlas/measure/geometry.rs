@@ -44,6 +44,23 @@ pub(super) fn uv64(c: [f32; 2]) -> [f64; 2] {
     [f64::from(c[0]), f64::from(c[1])]
 }
 
+/// A face's `A2` and whether it is UV-degenerate (the UV half of [`face_geometry`]).
+pub(super) fn uv_area(uv: &[[f32; 2]; 3]) -> (f64, bool) {
+    let [s0, t0] = uv64(uv[0]);
+    let [s1, t1] = uv64(uv[1]);
+    let [s2, t2] = uv64(uv[2]);
+    let (ds1, dt1, ds2, dt2) = (s1 - s0, t1 - t0, s2 - s0, t2 - t0);
+    let a2 = 0.5 * (ds1 * dt2 - ds2 * dt1);
+    let lmax2 = nan_max(
+        nan_max(ds1.hypot(dt1), ds2.hypot(dt2)),
+        (s2 - s1).hypot(t2 - t1),
+    );
+    (
+        a2,
+        not_greater(a2.abs(), DEGENERATE_RELATIVE * lmax2 * lmax2),
+    )
+}
+
 /// Computes [`FaceGeometry`] for every face.
 pub(super) fn face_geometry(mesh: &TriangleMesh, corner_uvs: &[[[f32; 2]; 3]]) -> FaceGeometry {
     let nf = mesh.num_faces();
@@ -62,16 +79,7 @@ pub(super) fn face_geometry(mesh: &TriangleMesh, corner_uvs: &[[[f32; 2]; 3]]) -
         let a3 = 0.5 * norm(cross(e1, e2));
         let (l1, l2, l3) = (norm(e1), norm(e2), norm(e3));
         let lmax3 = nan_max(nan_max(l1, l2), l3);
-        let [s0, t0] = uv64(uv[0]);
-        let [s1, t1] = uv64(uv[1]);
-        let [s2, t2] = uv64(uv[2]);
-        let (ds1, dt1, ds2, dt2) = (s1 - s0, t1 - t0, s2 - s0, t2 - t0);
-        let a2 = 0.5 * (ds1 * dt2 - ds2 * dt1);
-        let lmax2 = nan_max(
-            nan_max(ds1.hypot(dt1), ds2.hypot(dt2)),
-            (s2 - s1).hypot(t2 - t1),
-        );
-        let deg2 = not_greater(a2.abs(), DEGENERATE_RELATIVE * lmax2 * lmax2);
+        let (a2, deg2) = uv_area(uv);
         let deg3 = not_greater(a3, DEGENERATE_RELATIVE * lmax3 * lmax3);
         g.area_3d_m2.push(a3);
         g.signed_uv_area.push(a2);

@@ -128,6 +128,7 @@ use crate::mesh::{FaceId, TriangleMesh};
 
 mod charts;
 mod geometry;
+mod moved;
 mod numpy;
 mod overlap;
 mod raster;
@@ -584,6 +585,7 @@ fn same_check(a: &OrientationCheck, b: &OrientationCheck) -> bool {
         && a.chart_positive == b.chart_positive
         && a.corner_id == b.corner_id
         && a.uv_boundary == b.uv_boundary
+        && ra.corner_pid == rb.corner_pid
         && bits(&ra.area_3d_m2) == bits(&rb.area_3d_m2)
         && edges(&ra.edge_len_m) == edges(&rb.edge_len_m)
         && (ra.num_charts, ra.unique_corners, ra.seam_edges)
@@ -633,10 +635,25 @@ fn chart_orientation(
     chart_of_face: &[u32],
     num_charts: usize,
 ) -> (Vec<f64>, Vec<bool>) {
+    chart_orientation_of(
+        &geo.signed_uv_area,
+        &geo.uv_degenerate,
+        chart_of_face,
+        num_charts,
+    )
+}
+
+/// [`chart_orientation`] of the faces' `A2` and UV degeneracy.
+fn chart_orientation_of(
+    signed_uv_area: &[f64],
+    uv_degenerate: &[bool],
+    chart_of_face: &[u32],
+    num_charts: usize,
+) -> (Vec<f64>, Vec<bool>) {
     let mut chart_signed = vec![0.0f64; num_charts];
     for (f, &c) in chart_of_face.iter().enumerate() {
-        if !geo.uv_degenerate[f] {
-            chart_signed[c as usize] += geo.signed_uv_area[f];
+        if !uv_degenerate[f] {
+            chart_signed[c as usize] += signed_uv_area[f];
         }
     }
     let positive = chart_signed.iter().map(|&s| s >= 0.0).collect();
@@ -683,6 +700,7 @@ pub(crate) struct OrientationCheck {
 /// What [`OrientationCheck`] keeps of [`geometry::FaceGeometry`] and [`charts::Connectivity`]
 /// beyond its public fields.
 struct CheckRest {
+    corner_pid: Vec<u32>,
     area_3d_m2: Vec<f64>,
     edge_len_m: Vec<[f64; 3]>,
     num_charts: usize,
@@ -714,6 +732,7 @@ impl OrientationCheck {
             open_border_length_3d_m: r.open_border_length_3d_m,
             uv_boundary: self.uv_boundary,
             corner_id: self.corner_id,
+            corner_pid: r.corner_pid,
         };
         (geo, con)
     }
@@ -752,6 +771,7 @@ pub(crate) fn orientation_check(
         corner_id: con.corner_id,
         uv_boundary: con.uv_boundary,
         rest: CheckRest {
+            corner_pid: con.corner_pid,
             area_3d_m2: geo.area_3d_m2,
             edge_len_m: geo.edge_len_m,
             num_charts: con.num_charts,

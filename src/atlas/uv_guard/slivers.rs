@@ -211,6 +211,15 @@ impl SliverMoves {
         });
     }
 
+    /// The faces at every move's vertices, kept or undone (ascending, each once): outside
+    /// them, no corner's UV differs from what it was before the sliver repair.
+    pub(in crate::atlas) fn faces(&self) -> Vec<u32> {
+        let mut faces: Vec<u32> = self.moves.iter().flat_map(|m| m.faces.clone()).collect();
+        faces.sort_unstable();
+        faces.dedup();
+        faces
+    }
+
     /// UV vertices moved by the moves kept (one per apex move, two per base move).
     pub(in crate::atlas) fn vertices_moved(&self) -> usize {
         self.moves
