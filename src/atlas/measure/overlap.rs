@@ -96,18 +96,6 @@ pub(super) fn ccw_triangle(uv: &[[f32; 2]; 3]) -> Option<Tri> {
     Some(t)
 }
 
-/// One grid entry: a face's UV box (exact: `f32` corners) and lowest cell, 24 bytes, stored
-/// contiguously per cell so that the candidate loop streams through memory.
-#[derive(Clone, Copy)]
-struct Entry {
-    /// `[u_min, v_min, u_max, v_max]`.
-    bbox: [f32; 4],
-    /// Lowest cell `[cx, cy]` the box meets.
-    lo: [u16; 2],
-    /// Index into the page's candidates.
-    cand: u32,
-}
-
 /// Rows of cells per parallel batch; the pair cap is checked between batches (deterministic).
 const ROWS_PER_BATCH: u32 = 32;
 
@@ -264,7 +252,9 @@ fn count_page(corner_uvs: &[[[f32; 2]; 3]], faces: &[u32], out: &mut ExactPairs)
         }
         g = (g / 2).max(1);
     }
-    // Cell lists (CSR), cells row-major (y then x).
+    // Cell lists (CSR), cells row-major (y then x), of candidate indices (4 bytes per entry: the
+    // lists are scattered once, and the pair loop reads each face's box and lowest cell by
+    // index; 24-byte entries with the box inside made the scatter cost more than the reads save).
     let num_cells = (g as usize) * (g as usize);
     let ranges: Vec<[u32; 4]> = boxes.iter().map(|b| range_of(b, g)).collect();
     let mut start = vec![0u32; num_cells + 1];
@@ -279,27 +269,18 @@ fn count_page(corner_uvs: &[[[f32; 2]; 3]], faces: &[u32], out: &mut ExactPairs)
         start[i + 1] += start[i];
     }
     let mut next = start.clone();
-    let empty = Entry {
-        bbox: [0.0; 4],
-        lo: [0; 2],
-        cand: 0,
-    };
-    let mut entries = vec![empty; start[num_cells] as usize];
+    let mut entries = vec![0u32; start[num_cells] as usize];
     for (i, r) in ranges.iter().enumerate() {
-        let e = Entry {
-            bbox: boxes[i],
-            lo: [r[0] as u16, r[1] as u16],
-            cand: i as u32,
-        };
         for cy in r[1]..=r[3] {
             for cx in r[0]..=r[2] {
                 let cell = (cy * g + cx) as usize;
-                entries[next[cell] as usize] = e;
+                entries[next[cell] as usize] = i as u32;
                 next[cell] += 1;
             }
         }
     }
-    drop((next, ranges, boxes));
+    let lo: Vec<[u16; 2]> = ranges.iter().map(|r| [r[0] as u16, r[1] as u16]).collect();
+    drop((next, ranges));
 
     let count_rows = |rows: std::ops::Range<u32>| -> Vec<[u32; 2]> {
         let mut c = Vec::new();
@@ -307,20 +288,20 @@ fn count_page(corner_uvs: &[[[f32; 2]; 3]], faces: &[u32], out: &mut ExactPairs)
             for cx in 0..g {
                 let cell = (cy * g + cx) as usize;
                 let list = &entries[start[cell] as usize..start[cell + 1] as usize];
-                for (ia, ea) in list.iter().enumerate() {
-                    for eb in &list[ia + 1..] {
+                for (ia, &ta) in list.iter().enumerate() {
+                    let (ta, la) = (ta as usize, lo[ta as usize]);
+                    for &tb in &list[ia + 1..] {
+                        let tb = tb as usize;
                         // Test each pair once: in the lowest cell both boxes meet.
-                        if u32::from(ea.lo[0].max(eb.lo[0])) != cx
-                            || u32::from(ea.lo[1].max(eb.lo[1])) != cy
-                        {
+                        let lb = lo[tb];
+                        if u32::from(la[0].max(lb[0])) != cx || u32::from(la[1].max(lb[1])) != cy {
                             continue;
                         }
                         // Strict box overlap is necessary for intersecting interiors.
-                        let (a, b) = (&ea.bbox, &eb.bbox);
+                        let (a, b) = (&boxes[ta], &boxes[tb]);
                         if !(a[0] < b[2] && b[0] < a[2] && a[1] < b[3] && b[1] < a[3]) {
                             continue;
                         }
-                        let (ta, tb) = (ea.cand as usize, eb.cand as usize);
                         if !interiors_intersect_pair(&tris[ta], &tris[tb]) {
                             continue;
                         }
