@@ -102,24 +102,14 @@ pub struct PreparedChart {
 /// 3-D area, as [`PreparedChart::unit_scale`] scales it). 0 for a chart with no UV area or a
 /// non-finite UV. Which charts a cut would help most: long arms and concave bays waste most.
 pub fn box_waste_m2(chart: &PackChart<'_>) -> f64 {
-    let Ok(prep) = prepare_chart(0, chart) else {
-        return 0.0;
-    };
-    if prep.unit_scale <= 0.0 {
-        return 0.0;
-    }
-    let s = prep.unit_scale;
-    // The triangles' corners (repeats do not change the hull).
-    let points: Vec<[f64; 2]> = chart
-        .triangles
-        .iter()
-        .flatten()
-        .map(|&i| chart.uv[i as usize])
-        .map(|p| [(p[0] - prep.centre[0]) * s, (p[1] - prep.centre[1]) * s])
-        .collect();
-    match min_area_box(&convex_hull(&points)) {
-        Some(b) => (b.along * b.across - chart.area_m2).max(0.0),
-        None => 0.0,
+    // `box_sides_m` alone, without the rest of `prepare_chart` (outline triangles, boundary
+    // chain): the packing-aware cuts ask this of every chart after every kept cut.
+    let [long_m, short_m] = box_sides_m(chart);
+    let waste = long_m * short_m - chart.area_m2;
+    if waste.is_finite() {
+        waste.max(0.0)
+    } else {
+        0.0
     }
 }
 
