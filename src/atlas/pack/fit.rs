@@ -22,6 +22,32 @@ pub(super) fn fit_to_page(
     start: FitStart,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
 ) -> Result<Trial, PackError> {
+    // Only a search that gives up at its first miss returns no trial.
+    search_density(ctx, start, monitor, false)?.ok_or_else(|| PackError::DoesNotFit {
+        charts: ctx.order.len(),
+        page_texels: ctx.page(),
+        padding_texels: ctx.options.padding_texels,
+    })
+}
+
+/// [`fit_to_page`], given up when its first trial (at the density the search starts from) does
+/// not fit: `Ok(None)` then, after that one trial. Otherwise the same search and result.
+pub(super) fn fit_to_page_unless_first_misses(
+    ctx: &Context<'_, '_>,
+    start: FitStart,
+    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
+) -> Result<Option<Trial>, PackError> {
+    search_density(ctx, start, monitor, true)
+}
+
+/// The search of [`fit_to_page`]; with `give_up_at_first_miss`, `Ok(None)` when the first
+/// trial does not fit.
+fn search_density(
+    ctx: &Context<'_, '_>,
+    start: FitStart,
+    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
+    give_up_at_first_miss: bool,
+) -> Result<Option<Trial>, PackError> {
     let [w, h] = ctx.page();
     let mut progress = Steps::new(monitor, ctx.order.len() * (MAX_FIT_TRIALS + FIT_PROBES + 1));
     let total_area: f64 = ctx.order.iter().map(|&i| ctx.prepared[i].area_m2).sum();
@@ -35,7 +61,9 @@ pub(super) fn fit_to_page(
         let t = ctx.run(1.0, false, &mut progress)?;
         progress.finish()?;
         return if t.unplaced == 0 {
-            Ok(t)
+            Ok(Some(t))
+        } else if give_up_at_first_miss {
+            Ok(None)
         } else {
             Err(does_not_fit())
         };
@@ -96,6 +124,9 @@ pub(super) fn fit_to_page(
             ctx.run(d, false, &mut progress)?
         };
         let fitted = t.unplaced == 0;
+        if !fitted && give_up_at_first_miss && search.steps == 0 {
+            return Ok(None);
+        }
         if !fitted && beat.is_some_and(|b| d <= b) {
             // Nothing above the density to beat fits where it was tried.
             break;
@@ -130,7 +161,7 @@ pub(super) fn fit_to_page(
         }
     };
     progress.finish()?;
-    Ok(t)
+    Ok(Some(t))
 }
 
 /// The density at which charts of `total_area_m2` would cover [`FIT_START_FILL`] of a page of

@@ -11,7 +11,9 @@
 //! below [`HOLE_SCORED_MIN_CHARTS`] charts), then with the other only above the density found
 //! ([`FirstPacker::Horizons`] runs hole filling only where the
 //! horizons leave much of the page empty: efficiency below [`HOLE_FILL_BELOW`] with many
-//! charts, [`HOLE_FILL_BELOW_FEW_CHARTS`] with few); a fixed density packs with the horizons,
+//! charts, [`HOLE_FILL_BELOW_FEW_CHARTS`] with few; with many charts, when the horizons' first
+//! trial does not fit, hole filling searches from there at once and the horizons' search goes
+//! on only when hole filling does not fit there either); a fixed density packs with the horizons,
 //! and again with hole filling when it needs more than one page. Then it writes normalized
 //! page UVs. Hole filling places the charts in the order of `padded_box_order` (largest
 //! padded UV box first):
@@ -80,7 +82,7 @@ pub mod placement;
 mod types;
 
 pub use cache::PackCache;
-use fit::{fit_to_page, FitStart};
+use fit::{fit_to_page, fit_to_page_unless_first_misses, FitStart};
 pub use fit::{FIT_GUESS_GROWTH, FIT_START_FILL};
 pub use one_page::pack_one_page;
 pub use types::{
@@ -384,12 +386,47 @@ fn pack_charts_with(
         };
         return Ok(ctx.output(&trial));
     }
-    let mut trial = found(pack(&ctx, start, monitor))?;
+    let total_area_m2: f64 = order.iter().map(|&i| prepared[i].area_m2).sum();
+    // Many charts, fit to page: the horizons' search gives up when its first trial does not
+    // fit; hole filling then searches from that same density, and when it fits there, its
+    // packing is the one the whole horizons' search and hole filling after it would give
+    // (`fit::fit_to_page_unless_first_misses`), without the rest of the horizons' search.
+    // When hole filling does not fit there either, both searches run as below.
+    let first_hole_order;
+    let first =
+        if options.density == TexelDensity::FitToPage && order.len() >= HOLE_SCORED_MIN_CHARTS {
+            match fit_to_page_unless_first_misses(&ctx, start, monitor) {
+                Ok(Some(t)) => Some(Some(t)),
+                Ok(None) => {
+                    first_hole_order =
+                        padded_box_order(charts, &prepared, &order, options, total_area_m2);
+                    ctx.holes = true;
+                    ctx.scored = true;
+                    ctx.order = &first_hole_order;
+                    // Where hole filling would start after the horizons (their density is below
+                    // this first trial's, and never the floor of a search that fits at once).
+                    let from = FitStart::Beat(above.unwrap_or(0.0));
+                    if let Some(t) = fit_to_page_unless_first_misses(&ctx, from, monitor)? {
+                        return Ok(ctx.output(&t));
+                    }
+                    ctx.holes = false;
+                    ctx.scored = false;
+                    ctx.order = &order;
+                    None
+                }
+                Err(e) => Some(found(Err(e))?),
+            }
+        } else {
+            None
+        };
+    let mut trial = match first {
+        Some(t) => t,
+        None => found(pack(&ctx, start, monitor))?,
+    };
     // Hole filling ([`hole`]) where the horizons leave much of the page empty: fit-to-page
     // below `HOLE_FILL_BELOW` (`HOLE_FILL_BELOW_FEW_CHARTS` with few charts), or a fixed
     // density that needs more than one page. The better
     // packing is kept (higher density, or fewer pages; ties: the horizons').
-    let total_area_m2: f64 = order.iter().map(|&i| prepared[i].area_m2).sum();
     let [w, h] = ctx.page();
     let efficiency = |d: f64| total_area_m2 * d * d / (f64::from(w) * f64::from(h));
     // The density to beat: the first packer's, or the caller's when it found none above it

@@ -955,6 +955,135 @@ fn hole_filling_first_keeps_the_denser_search_and_skips_the_horizons_where_they_
 }
 
 #[test]
+fn many_charts_skip_the_horizons_search_where_hole_filling_fits_at_its_start() {
+    // With HOLE_SCORED_MIN_CHARTS charts or more, fit to page, the horizons search first and
+    // hole filling (contact-scored) after them, from their density, where they leave the page
+    // sparse. When the horizons' first trial (at the fill density) does not fit, their density
+    // ends below it, so hole filling starts at the fill density whatever it is: `pack_charts`
+    // then gives the horizons up and packs with hole filling from there, when that fits. The
+    // same packing as the full horizons' search followed by hole filling, in fewer trials.
+    let quiet = || |_: (usize, usize)| ControlFlow::Continue(());
+    let (mut skipped, mut fell_back) = (0, 0);
+    for (what, charts) in [
+        // The horizons fit at the fill density: their search as ever.
+        ("mixed 60", mixed_set(60, 3)),
+        // Rings and arcs with small discs: the horizons miss at the fill density, hole
+        // filling fits there (discs inside the rings).
+        (
+            "rings and small discs",
+            (0..60)
+                .map(|k| {
+                    if k < 20 {
+                        strip(3.0 + 0.1 * f64::from(k), 0.4, 24, 3.5 + 0.1 * f64::from(k))
+                    } else {
+                        disc(12, 0.2 + 0.01 * f64::from(k))
+                    }
+                })
+                .collect(),
+        ),
+        (
+            "arcs and small discs",
+            (0..60)
+                .map(|k| {
+                    if k < 15 {
+                        strip(4.0 + 0.2 * f64::from(k), 0.5, 24, 2.5 + 0.1 * f64::from(k))
+                    } else {
+                        disc(10, 0.3 + 0.01 * f64::from(k))
+                    }
+                })
+                .collect(),
+        ),
+        // Both miss at the fill density: both searches run.
+        (
+            "bent strips",
+            (0..40)
+                .map(|k| strip(2.0 + 0.2 * f64::from(k), 0.5, 12, 0.5 + 0.1 * f64::from(k)))
+                .collect(),
+        ),
+    ] {
+        assert!(charts.len() >= HOLE_SCORED_MIN_CHARTS);
+        let borrowed = as_pack_charts(&charts);
+        let options = PackOptions::default();
+        let packing = pack_charts(&borrowed, &options, &mut go()).unwrap();
+        assert_guarantees(&check_packing(&borrowed, &packing, &options), what);
+        let (prepared, order, total) = prepared_in_order(&borrowed);
+        let horizons_ctx = Context::new(&borrowed, &prepared, &order, &options);
+        // The horizons' whole search, and whether its first trial fits.
+        let horizons = fit_to_page(&horizons_ctx, FitStart::Fill, &mut quiet()).unwrap();
+        let first =
+            fit_to_page_unless_first_misses(&horizons_ctx, FitStart::Fill, &mut quiet()).unwrap();
+        if let Some(t) = &first {
+            // A first trial that fits: the search goes on as `fit_to_page`'s.
+            assert_eq!(t.texels_per_unit, horizons.texels_per_unit, "{what}");
+            continue;
+        }
+        let fill = fill_density(total, horizons_ctx.page());
+        assert!(horizons.texels_per_unit < fill, "{what}");
+        let hole_order = padded_box_order(&borrowed, &prepared, &order, &options, total);
+        let hole_ctx = Context {
+            holes: true,
+            scored: true,
+            ..Context::new(&borrowed, &prepared, &hole_order, &options)
+        };
+        // Hole filling at the fill density, and its search after the horizons.
+        let fits_at_fill =
+            fit_to_page_unless_first_misses(&hole_ctx, FitStart::Beat(0.0), &mut quiet())
+                .unwrap()
+                .is_some();
+        if !fits_at_fill {
+            // Both searches run, as without the skip: never below the horizons.
+            fell_back += 1;
+            assert!(
+                packing.texels_per_unit >= horizons.texels_per_unit,
+                "{what}"
+            );
+            continue;
+        }
+        // (Within the search's tolerance below the fill density, hole filling after the
+        // horizons would start just above it.)
+        assert!(
+            horizons.texels_per_unit * (1.0 + FIT_TOLERANCE) < fill,
+            "{what}"
+        );
+        skipped += 1;
+        // Fresh contexts count the trials of each search alone.
+        let horizons_trials = {
+            let ctx = Context::new(&borrowed, &prepared, &order, &options);
+            fit_to_page(&ctx, FitStart::Fill, &mut quiet()).unwrap();
+            ctx.trials.into_inner()
+        };
+        let after_ctx = Context {
+            holes: true,
+            scored: true,
+            ..Context::new(&borrowed, &prepared, &hole_order, &options)
+        };
+        let after = fit_to_page(
+            &after_ctx,
+            FitStart::Beat(horizons.texels_per_unit),
+            &mut quiet(),
+        )
+        .unwrap();
+        let reference = after_ctx.output(&after);
+        assert!(
+            reference.texels_per_unit > horizons.texels_per_unit,
+            "{what}"
+        );
+        // The horizons' first trial, then the same hole-filling search.
+        assert_eq!(packing.trials, 1 + reference.trials, "{what}");
+        assert!(horizons_trials > 1, "{what}");
+        assert_eq!(
+            Packing {
+                trials: reference.trials,
+                ..packing
+            },
+            reference,
+            "{what}"
+        );
+    }
+    assert_eq!((skipped, fell_back), (2, 1));
+}
+
+#[test]
 fn a_search_above_a_density_that_fits_packs_denser_or_gives_up() {
     let sets = [
         ("12 mixed charts", mixed_set(12, 3), FirstPacker::Horizons),
