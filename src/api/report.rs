@@ -97,8 +97,9 @@ pub struct PipelineJson {
     pub splits_area_ratio: usize,
     /// Small charts merged back after splitting.
     pub merges: usize,
-    /// Charts added by the packing-aware cuts, because that raised the packing efficiency
-    /// (meshes of at most 20k triangles and 256 charts that pack below 0.72).
+    /// Charts added by the pack stage's cuts: fit to page, the packing-aware cuts, because that
+    /// raised the packing efficiency (meshes of at most 20k triangles and 256 charts that pack
+    /// below 0.72); at a fixed density, the pieces of charts too large for a page.
     pub packing_cuts: usize,
     /// Charts kept above the stretch or area-ratio bound (could not be split further).
     pub bound_unresolved: usize,

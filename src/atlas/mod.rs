@@ -69,7 +69,8 @@ pub struct PipelineStats {
     pub parameterize_splits: [usize; 3],
     /// Small charts merged back by the parameterize stage.
     pub parameterize_merges: usize,
-    /// Charts added by cuts that raised the packing efficiency (`cut_for_packing`).
+    /// Charts added by the pack stage's cuts (`cut_for_packing`): cuts that raised the packing
+    /// efficiency, or at a fixed density the pieces of charts too large for a page.
     pub packing_cuts: usize,
     /// Charts kept although their stretch or area ratio is above the bound (could not be split
     /// further).

@@ -3,15 +3,16 @@
 //! It runs at the start of the pack stage (its packing is the stage's packing when no cut is
 //! kept), without a cancel checkpoint of its own: it is bounded to a few packings (and on
 //! low-poly meshes validations) of a mesh of at most [`PACKING_CUT_MAX_FACES`] faces, or of
-//! at most [`LONG_CUT_MAX_FACES`] with a long strip (the long cuts alone).
+//! at most [`LONG_CUT_MAX_FACES`] with a long strip (the long cuts alone). At a fixed density
+//! it cuts instead the charts too large for a page ([`cut_to_pages`]).
 //! Deterministic.
 
 use super::error::AtlasError;
 use super::options::AtlasOptions;
 use super::pack::place::{box_sides_m, box_waste_m2, length_pieces, neck_cut};
 use super::pack::{
-    pack_charts_above, pack_charts_cached, pack_one_page, FirstPacker, PackCache, PackChart,
-    PackOptions, Packing, TexelDensity,
+    pack_charts_above, pack_charts_cached, pack_one_page, too_large_for_a_page, FirstPacker,
+    PackCache, PackChart, PackOptions, Packing, TexelDensity,
 };
 use super::pack_input::{pack_charts_of, pack_inputs};
 use super::parameterize;
@@ -85,6 +86,18 @@ const LONG_CUT_MAX_FACES: usize = 200_000;
 /// At most this many pieces per chart and round ([`LONG_CUT_FRACTION`]).
 const LONG_CUT_MAX_PIECES: usize = 16;
 
+/// At a fixed density ([`TexelDensity::TexelsPerUnit`]), a chart whose minimum-area rectangle
+/// does not fit a page is cut across its length into pieces no longer than this fraction of the
+/// page's shorter side (less the padding on both sides) ([`cut_to_pages`]): a piece nearly as
+/// long as the page would place only in few orientations. Trade-off: shorter pieces place more
+/// freely and cost more seams.
+const PAGE_CUT_FRACTION: f64 = 0.7;
+/// Rounds of [`cut_to_pages`]: a piece cut across the length of a chart larger than a page both
+/// ways is still too wide, and is cut across its own length in the next round.
+const PAGE_CUT_ROUNDS: usize = 4;
+/// At most this many pieces per chart and round ([`PAGE_CUT_FRACTION`]).
+const PAGE_CUT_MAX_PIECES: usize = 64;
+
 /// How `cut_for_packing` cuts a chart it picks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Way {
@@ -143,7 +156,8 @@ pub(super) fn pack_options(mesh: &TriangleMesh, options: &AtlasOptions) -> PackO
 /// to [`PACKING_CUT_MAX_TRIES`] charts; when no single cut paid and there are at most
 /// [`PACKING_CUT_ALL_MAX_CHARTS`] charts, every chart is cut at once and validated again
 /// (then every piece again, up to [`PACKING_CUT_ALL_LEVELS`] levels), the last tries. Only
-/// with [`TexelDensity::FitToPage`] (an explicit density does not change with the cut). On
+/// with [`TexelDensity::FitToPage`] (an explicit density does not change with the cut: there
+/// only the charts too large for a page are cut, [`cut_to_pages`], and nothing is packed). On
 /// meshes above [`PACKING_CUT_MAX_FACES`] faces, up to [`LONG_CUT_MAX_FACES`], only the long
 /// cuts run, and only when a chart is that long (else nothing is packed here).
 /// Deterministic (every step is). Returns the charts to use, the number of charts the cuts
@@ -153,6 +167,10 @@ pub(super) fn cut_for_packing(
     validated: parameterize::ParameterizedCharts,
     options: &AtlasOptions,
 ) -> Result<(parameterize::ParameterizedCharts, usize, Option<Packing>), AtlasError> {
+    if let TexelDensity::TexelsPerUnit(texels_per_unit) = options.pack.density {
+        let (charts, cuts) = cut_to_pages(mesh, validated, options, texels_per_unit)?;
+        return Ok((charts, cuts, None));
+    }
     // Above PACKING_CUT_MAX_FACES faces only the long cuts run, up to LONG_CUT_MAX_FACES.
     let long_only = !cuts_apply(mesh, options);
     if long_only
@@ -308,100 +326,7 @@ pub(super) fn cut_for_packing(
                picks: &[(usize, Way)],
                flatten: bool|
      -> Result<parameterize::ParameterizedCharts, AtlasError> {
-        let charts = &current.segmentation.charts;
-        let mut stats = current.segmentation.stats;
-        let mut parts: Vec<(Vec<FaceId>, Option<parameterize::LocatedMap>)> = Vec::new();
-        for (i, faces) in charts.iter().enumerate() {
-            let parent = current.maps[i].as_ref();
-            let unresolved = current.unresolved.iter().any(|(c, _)| *c == i);
-            let way = picks
-                .iter()
-                .find(|(c, _)| *c == i)
-                .map(|&(_, w)| w)
-                .filter(|_| parent.is_some() && !unresolved);
-            let Some(way) = way else {
-                parts.push((faces.clone(), parent.cloned()));
-                continue;
-            };
-            let pieces: Vec<Vec<FaceId>> = match way {
-                Way::Lengthwise(k) => {
-                    let sliced = parent.and_then(|(map, _)| {
-                        let (cm, _) = parameterize::chart_mesh(mesh, faces);
-                        let chart = PackChart {
-                            uv: &map.uv,
-                            triangles: &cm.triangles,
-                            area_m2: 0.0,
-                        };
-                        length_pieces(&chart, k).map(|piece| cut_pieces(mesh, faces, &piece))
-                    });
-                    let Some(pieces) = sliced else {
-                        // Every centroid in one slice: the chart stays whole.
-                        parts.push((faces.clone(), parent.cloned()));
-                        continue;
-                    };
-                    pieces
-                }
-                Way::Neck | Way::Diameter => {
-                    let by_neck = if way == Way::Neck {
-                        parent.and_then(|(map, _)| {
-                            let (cm, _) = parameterize::chart_mesh(mesh, faces);
-                            let side = neck_cut(&PackChart {
-                                uv: &map.uv,
-                                triangles: &cm.triangles,
-                                area_m2: 0.0,
-                            })?;
-                            // The cut follows triangle edges across the neck: its teeth go to
-                            // the other side, as on the borders the segmentation grows.
-                            Some(segment::smooth_cut(mesh, faces, &side))
-                        })
-                    } else {
-                        None
-                    };
-                    let inside = |f: FaceId| faces.binary_search(&f).is_ok();
-                    let (a, b) =
-                        by_neck.unwrap_or_else(|| segment::split_in_two(mesh, faces, &inside));
-                    vec![a, b]
-                }
-            };
-            for mut part in segment::enforce_disks(mesh, pieces, &mut stats) {
-                part.sort_unstable();
-                let map = parent.and_then(|p| parameterize::restricted_map(mesh, &part, p));
-                parts.push((part, map));
-            }
-        }
-        parts.retain(|(faces, _)| !faces.is_empty());
-        // `segment::finish`'s order (by lowest face), so that the maps stay aligned.
-        parts.sort_unstable_by_key(|(faces, _)| faces[0]);
-        let (proposed, maps): (Vec<_>, Vec<_>) = parts.into_iter().unzip();
-        let segmentation = segment::finish(mesh, proposed, stats);
-        if flatten {
-            return Ok(parameterize::parameterize_charts(
-                mesh,
-                &segmentation,
-                &validate_options,
-                &mut StageProgress::ignored(Stage::Parameterize),
-            )?);
-        }
-        debug_assert_eq!(segmentation.charts.len(), maps.len());
-        let unresolved = current
-            .unresolved
-            .iter()
-            .map(|(c, defect)| {
-                let first = charts[*c][0];
-                (segmentation.face_chart[first].index(), defect.clone())
-            })
-            .collect();
-        Ok(parameterize::ParameterizedCharts {
-            segmentation,
-            maps,
-            unresolved,
-            splits: current.splits,
-            degenerate_splits: current.degenerate_splits,
-            degenerate_faces: current.degenerate_faces,
-            merges: current.merges,
-            stretch: current.stretch,
-            asp: current.asp,
-        })
+        cut_charts(mesh, current, picks, flatten.then_some(&validate_options))
     };
     // Each chart's waste in its minimum-area rectangle (`pack::place::box_waste_m2`).
     let wastes = |v: &parameterize::ParameterizedCharts| -> Result<Vec<f64>, AtlasError> {
@@ -576,4 +501,190 @@ impl CutState {
         self.best_packing = packing;
         self.current = candidate;
     }
+}
+
+/// `current` with each chart of `picks` cut its way (`cut_for_packing`'s comment there); with
+/// `validate` (options), the mesh is validated again with the parts instead of each part keeping
+/// its parent's map restricted to it.
+fn cut_charts(
+    mesh: &TriangleMesh,
+    current: &parameterize::ParameterizedCharts,
+    picks: &[(usize, Way)],
+    validate: Option<&parameterize::ParameterizeOptions>,
+) -> Result<parameterize::ParameterizedCharts, AtlasError> {
+    let charts = &current.segmentation.charts;
+    let mut stats = current.segmentation.stats;
+    let mut parts: Vec<(Vec<FaceId>, Option<parameterize::LocatedMap>)> = Vec::new();
+    for (i, faces) in charts.iter().enumerate() {
+        let parent = current.maps[i].as_ref();
+        let unresolved = current.unresolved.iter().any(|(c, _)| *c == i);
+        let way = picks
+            .iter()
+            .find(|(c, _)| *c == i)
+            .map(|&(_, w)| w)
+            .filter(|_| parent.is_some() && !unresolved);
+        let Some(way) = way else {
+            parts.push((faces.clone(), parent.cloned()));
+            continue;
+        };
+        let pieces: Vec<Vec<FaceId>> = match way {
+            Way::Lengthwise(k) => {
+                let sliced = parent.and_then(|(map, _)| {
+                    let (cm, _) = parameterize::chart_mesh(mesh, faces);
+                    let chart = PackChart {
+                        uv: &map.uv,
+                        triangles: &cm.triangles,
+                        area_m2: 0.0,
+                    };
+                    length_pieces(&chart, k).map(|piece| cut_pieces(mesh, faces, &piece))
+                });
+                let Some(pieces) = sliced else {
+                    // Every centroid in one slice: the chart stays whole.
+                    parts.push((faces.clone(), parent.cloned()));
+                    continue;
+                };
+                pieces
+            }
+            Way::Neck | Way::Diameter => {
+                let by_neck = if way == Way::Neck {
+                    parent.and_then(|(map, _)| {
+                        let (cm, _) = parameterize::chart_mesh(mesh, faces);
+                        let side = neck_cut(&PackChart {
+                            uv: &map.uv,
+                            triangles: &cm.triangles,
+                            area_m2: 0.0,
+                        })?;
+                        // The cut follows triangle edges across the neck: its teeth go to
+                        // the other side, as on the borders the segmentation grows.
+                        Some(segment::smooth_cut(mesh, faces, &side))
+                    })
+                } else {
+                    None
+                };
+                let inside = |f: FaceId| faces.binary_search(&f).is_ok();
+                let (a, b) = by_neck.unwrap_or_else(|| segment::split_in_two(mesh, faces, &inside));
+                vec![a, b]
+            }
+        };
+        for mut part in segment::enforce_disks(mesh, pieces, &mut stats) {
+            part.sort_unstable();
+            let map = parent.and_then(|p| parameterize::restricted_map(mesh, &part, p));
+            parts.push((part, map));
+        }
+    }
+    parts.retain(|(faces, _)| !faces.is_empty());
+    // `segment::finish`'s order (by lowest face), so that the maps stay aligned.
+    parts.sort_unstable_by_key(|(faces, _)| faces[0]);
+    let (proposed, maps): (Vec<_>, Vec<_>) = parts.into_iter().unzip();
+    let segmentation = segment::finish(mesh, proposed, stats);
+    if let Some(validate_options) = validate {
+        return Ok(parameterize::parameterize_charts(
+            mesh,
+            &segmentation,
+            validate_options,
+            &mut StageProgress::ignored(Stage::Parameterize),
+        )?);
+    }
+    debug_assert_eq!(segmentation.charts.len(), maps.len());
+    let unresolved = current
+        .unresolved
+        .iter()
+        .map(|(c, defect)| {
+            let first = charts[*c][0];
+            (segmentation.face_chart[first].index(), defect.clone())
+        })
+        .collect();
+    Ok(parameterize::ParameterizedCharts {
+        segmentation,
+        maps,
+        unresolved,
+        splits: current.splits,
+        degenerate_splits: current.degenerate_splits,
+        degenerate_faces: current.degenerate_faces,
+        merges: current.merges,
+        stretch: current.stretch,
+        asp: current.asp,
+    })
+}
+
+/// At a fixed density (`texels_per_unit`), every chart whose minimum-area rectangle (with the
+/// padding) does not fit a page axis-aligned is cut across its length into pieces no longer
+/// than [`PAGE_CUT_FRACTION`] of the page's shorter side (padding left out) ([`length_pieces`], at most [`PAGE_CUT_MAX_PIECES`]),
+/// each part keeping its parent's map restricted to it, then made disks; and the pieces again,
+/// up to [`PAGE_CUT_ROUNDS`] rounds, so that a chart larger than a page both ways ends in
+/// pieces that fit. Without it such a chart is [`PackError::ChartTooLarge`]; a chart of one
+/// face cannot be cut and still is. Returns the charts and how many charts the cuts added.
+/// Deterministic.
+///
+/// [`PackError::ChartTooLarge`]: super::pack::PackError::ChartTooLarge
+fn cut_to_pages(
+    mesh: &TriangleMesh,
+    validated: parameterize::ParameterizedCharts,
+    options: &AtlasOptions,
+    texels_per_unit: f64,
+) -> Result<(parameterize::ParameterizedCharts, usize), AtlasError> {
+    let (w, h) = (options.pack.width_texels, options.pack.height_texels);
+    let [shorter_side, longer_side] = [w.min(h), w.max(h)].map(f64::from);
+    // A chart's footprint takes its padding on both sides and up to a texel more at each end.
+    let margin = 2.0 * f64::from(options.pack.padding_texels) + 2.0;
+    let limit_texels = PAGE_CUT_FRACTION * (shorter_side - margin);
+    let mut current = validated;
+    let mut cuts = 0;
+    if !(limit_texels > 0.0 && texels_per_unit.is_finite() && texels_per_unit > 0.0) {
+        return Ok((current, cuts));
+    }
+    for _ in 0..PAGE_CUT_ROUNDS {
+        let inputs = pack_inputs(mesh, &current)?;
+        // Whether chart `i` fits an empty page in none of the packer's orientations.
+        let too_large = |i: usize| -> Option<bool> {
+            let (map, _) = current.maps[i].as_ref()?;
+            let chart = PackChart {
+                uv: &map.uv,
+                triangles: &inputs.triangles[i],
+                area_m2: inputs.area_m2[i],
+            };
+            too_large_for_a_page(&[chart], &options.pack, texels_per_unit)
+                .ok()
+                .and_then(|v| v.first().copied())
+        };
+        let picks: Vec<(usize, Way)> = (0..current.segmentation.charts.len())
+            .filter(|&i| !inputs.degenerate[i] && current.segmentation.charts[i].len() >= 2)
+            .filter_map(|i| {
+                let (map, _) = current.maps[i].as_ref()?;
+                let [long_m, short_m] = box_sides_m(&PackChart {
+                    uv: &map.uv,
+                    triangles: &inputs.triangles[i],
+                    area_m2: inputs.area_m2[i],
+                });
+                let [long, short] = [long_m, short_m].map(|m| m * texels_per_unit + margin);
+                // A chart whose rectangle fits axis-aligned is left to the packer; the others
+                // are cut when no orientation of the packer fits them (a strip may still fit
+                // across the diagonal).
+                let fits =
+                    (long <= longer_side && short <= shorter_side) || !too_large(i).unwrap_or(true);
+                let pieces = (long_m * texels_per_unit / limit_texels).ceil();
+                (!fits && pieces >= 2.0).then(|| {
+                    (
+                        i,
+                        Way::Lengthwise((pieces as usize).min(PAGE_CUT_MAX_PIECES)),
+                    )
+                })
+            })
+            .collect();
+        if picks.is_empty() {
+            break;
+        }
+        let candidate = cut_charts(mesh, &current, &picks, None)?;
+        let added = candidate
+            .segmentation
+            .charts
+            .len()
+            .saturating_sub(current.segmentation.charts.len());
+        if added == 0 {
+            break;
+        }
+        cuts += added;
+        current = candidate;
+    }
+    Ok((current, cuts))
 }

@@ -51,8 +51,9 @@ pub struct OptionFlags {
     /// Empty texels between charts and from the page edge. Default 2.
     #[arg(long)]
     pub padding_texels: Option<u32>,
-    /// Fixed texel density in texels per model unit (more pages open when needed). Default:
-    /// the largest density that fits everything on one page.
+    /// Fixed texel density in texels per model unit (more pages open when needed, and charts
+    /// larger than a page are cut). Default: the largest density that fits everything on one
+    /// page.
     #[arg(long)]
     pub texels_per_unit: Option<f64>,
     /// Rotations tried per chart when packing (1..=64). Default 16.

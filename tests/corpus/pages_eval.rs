@@ -54,14 +54,33 @@ fn every_page_of_a_multi_page_atlas_passes_the_evaluator() {
     let dir: PathBuf =
         std::env::temp_dir().join(format!("texatlas-pages-eval-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
+    // The torus has 47.4 m² of surface: at 30 texels per unit that is ~43k texels of charts in 4
+    // charts of ~200² texels each, more than one 256² page holds (the largest chart still fits a
+    // page). At 90, each chart is ~600² texels, larger than a page: the pack stage cuts them
+    // into pieces that fit (`packing_cuts`), where it used to fail with ChartTooLarge.
+    for (texels_per_unit, cut) in [("30", false), ("90", true)] {
+        let report = check_pages(&eval, &dir, texels_per_unit);
+        let cuts = report["pipeline"]["packing_cuts"]
+            .as_u64()
+            .expect("packing_cuts");
+        assert_eq!(
+            cuts > 0,
+            cut,
+            "at {texels_per_unit} texels per unit: {cuts} cuts"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Unwraps the torus at `texels_per_unit` on 256² pages, checks every page with the evaluator
+/// (panics on a problem) and returns the report.
+fn check_pages(eval: &std::path::Path, dir: &std::path::Path, texels_per_unit: &str) -> Value {
     let (input, output, report) = (
         dir.join("torus.glb"),
         dir.join("torus-atlas.glb"),
         dir.join("report.json"),
     );
     std::fs::write(&input, torus_glb()).expect("write input");
-    // The torus has 47.4 m² of surface: at 30 texels per unit that is ~43k texels of charts in 4 charts of ~200² texels each,
-    // more than one 256² page holds (the largest chart still fits a page).
     let run = Command::new(env!("CARGO_BIN_EXE_texatlas"))
         .args([
             "unwrap",
@@ -72,7 +91,7 @@ fn every_page_of_a_multi_page_atlas_passes_the_evaluator() {
             s(&report),
         ])
         .args(["--resolution", "256", "--padding-texels", "2"])
-        .args(["--texels-per-unit", "30", "--quiet"])
+        .args(["--texels-per-unit", texels_per_unit, "--quiet"])
         .output()
         .expect("run texatlas");
     assert!(
@@ -108,7 +127,7 @@ fn every_page_of_a_multi_page_atlas_passes_the_evaluator() {
         total_triangles += triangles;
         let file = dir.join(format!("page-{n}.glb"));
         std::fs::write(&file, glb).expect("write page");
-        let e = tools_common::evaluate(&eval, &file, &["--resolution", "256", "--padding", "2"])
+        let e = tools_common::evaluate(eval, &file, &["--resolution", "256", "--padding", "2"])
             .unwrap_or_else(|why| panic!("page {n}: {why}"));
         for (key, pointer) in [
             ("flipped", "/flipped"),
@@ -132,11 +151,11 @@ fn every_page_of_a_multi_page_atlas_passes_the_evaluator() {
             e["padding"]["violation_texels"]
         );
     }
-    let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(
         json!(total_triangles),
         report["input"]["triangles"],
         "every triangle is on exactly one page"
     );
     assert!(problems.is_empty(), "{}", problems.join("\n"));
+    report
 }

@@ -288,6 +288,32 @@ pub fn pack_charts_above(
     }
 }
 
+/// Whether each of `charts`, packed at the fixed density `texels_per_unit`, fits an empty page
+/// in none of the orientations the packer tries: the charts [`pack_charts`] would refuse there
+/// with [`PackError::ChartTooLarge`]. Cost: each chart's footprints at that density, and one
+/// placement test on an empty page per chart.
+///
+/// Errors: [`PackError::InvalidOption`], [`PackError::InvalidChart`].
+pub fn too_large_for_a_page(
+    charts: &[PackChart<'_>],
+    options: &PackOptions,
+    texels_per_unit: f64,
+) -> Result<Vec<bool>, PackError> {
+    let options = &PackOptions {
+        density: TexelDensity::TexelsPerUnit(texels_per_unit),
+        ..*options
+    };
+    options.check()?;
+    let (prepared, _) = prepare_all(charts, None)?;
+    let all: Vec<usize> = (0..charts.len()).collect();
+    let ctx = Context::new(charts, &prepared, &all, options);
+    Ok(ctx
+        .footprints(&all, texels_per_unit)
+        .iter()
+        .map(|orientations| ctx.new_page().find(orientations).is_none())
+        .collect())
+}
+
 /// Where the fit-to-page search of [`pack_charts_with`] starts.
 #[derive(Debug, Clone, Copy)]
 enum SearchFrom {
