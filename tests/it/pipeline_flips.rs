@@ -428,8 +428,8 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
 
     /// The same promises over several pages: 256-texel pages at a fixed density that needs one
-    /// to three of them for these meshes (meshes with a chart larger than a page get the typed
-    /// error, and are skipped: about half of them at this density).
+    /// to three of them for these meshes (charts larger than a page are cut into pieces that
+    /// fit; a mesh with a triangle larger than a page gets the typed error, and is skipped).
     #[test]
     fn defective_meshes_on_several_pages_keep_every_promise(
         kind in 0u8..3,
