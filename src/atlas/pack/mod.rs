@@ -416,8 +416,11 @@ fn pack_charts_with(
     // Many charts, fit to page: the horizons' search gives up when its first trial does not
     // fit; hole filling then searches from that same density, and when it fits there, its
     // packing is the one the whole horizons' search and hole filling after it would give
-    // (`fit::fit_to_page_unless_first_misses`), without the rest of the horizons' search.
-    // When hole filling does not fit there either, both searches run as below.
+    // (`fit::fit_to_page_unless_first_misses`), without the rest of the horizons' search. (One
+    // exception: when the horizons' density would have ended within `FIT_TOLERANCE` below that
+    // first trial's, hole filling used to start just above theirs; it starts at the first
+    // trial's now, a search as good within its tolerance.) When hole filling does not fit there
+    // either, both searches run as below.
     let first_hole_order;
     let first =
         if options.density == TexelDensity::FitToPage && order.len() >= HOLE_SCORED_MIN_CHARTS {
