@@ -86,11 +86,11 @@ const LONG_CUT_MAX_FACES: usize = 200_000;
 /// At most this many pieces per chart and round ([`LONG_CUT_FRACTION`]).
 const LONG_CUT_MAX_PIECES: usize = 16;
 
-/// At a fixed density ([`TexelDensity::TexelsPerUnit`]), a chart whose minimum-area rectangle
-/// does not fit a page is cut across its length into pieces no longer than this fraction of the
-/// page's shorter side (less the padding on both sides) ([`cut_to_pages`]): a piece nearly as
-/// long as the page would place only in few orientations. Trade-off: shorter pieces place more
-/// freely and cost more seams.
+/// At a fixed density ([`TexelDensity::TexelsPerUnit`]), a chart that fits an empty page in
+/// none of the packer's orientations is cut across its length into pieces no longer than this
+/// fraction of the page's shorter side, less the padding on both sides ([`cut_to_pages`]): a
+/// piece nearly as long as the page would place only in few orientations. Trade-off: shorter
+/// pieces place more freely and cost more seams.
 const PAGE_CUT_FRACTION: f64 = 0.7;
 /// Rounds of [`cut_to_pages`]: a piece cut across the length of a chart larger than a page both
 /// ways is still too wide, and is cut across its own length in the next round.
@@ -607,9 +607,10 @@ fn cut_charts(
     })
 }
 
-/// At a fixed density (`texels_per_unit`), every chart whose minimum-area rectangle (with the
-/// padding) does not fit a page axis-aligned is cut across its length into pieces no longer
-/// than [`PAGE_CUT_FRACTION`] of the page's shorter side (padding left out) ([`length_pieces`], at most [`PAGE_CUT_MAX_PIECES`]),
+/// At a fixed density (`texels_per_unit`), every chart that fits an empty page in none of the
+/// packer's orientations (checked only for charts longer than the pieces) is cut across its
+/// length into pieces no longer than [`PAGE_CUT_FRACTION`] of the page's shorter side (padding
+/// left out) ([`length_pieces`], at most [`PAGE_CUT_MAX_PIECES`]),
 /// each part keeping its parent's map restricted to it, then made disks; and the pieces again,
 /// up to [`PAGE_CUT_ROUNDS`] rounds, so that a chart larger than a page both ways ends in
 /// pieces that fit. Without it such a chart is [`PackError::ChartTooLarge`]; a chart of one
@@ -623,8 +624,7 @@ fn cut_to_pages(
     options: &AtlasOptions,
     texels_per_unit: f64,
 ) -> Result<(parameterize::ParameterizedCharts, usize), AtlasError> {
-    let (w, h) = (options.pack.width_texels, options.pack.height_texels);
-    let [shorter_side, longer_side] = [w.min(h), w.max(h)].map(f64::from);
+    let shorter_side = f64::from(options.pack.width_texels.min(options.pack.height_texels));
     // A chart's footprint takes its padding on both sides and up to a texel more at each end.
     let margin = 2.0 * f64::from(options.pack.padding_texels) + 2.0;
     let limit_texels = PAGE_CUT_FRACTION * (shorter_side - margin);
@@ -651,18 +651,17 @@ fn cut_to_pages(
             .filter(|&i| !inputs.degenerate[i] && current.segmentation.charts[i].len() >= 2)
             .filter_map(|i| {
                 let (map, _) = current.maps[i].as_ref()?;
-                let [long_m, short_m] = box_sides_m(&PackChart {
+                let [long_m, _] = box_sides_m(&PackChart {
                     uv: &map.uv,
                     triangles: &inputs.triangles[i],
                     area_m2: inputs.area_m2[i],
                 });
-                let [long, short] = [long_m, short_m].map(|m| m * texels_per_unit + margin);
-                // A chart whose rectangle fits axis-aligned is left to the packer; the others
-                // are cut when no orientation of the packer fits them (a strip may still fit
-                // across the diagonal).
-                let fits =
-                    (long <= longer_side && short <= shorter_side) || !too_large(i).unwrap_or(true);
+                // A chart no longer than the pieces fits a page in any orientation (its
+                // rectangle's diagonal is at most 0.99 of the page side); a longer one is cut
+                // when no orientation of the packer fits it (a strip may still fit across the
+                // diagonal, and a chart whose rectangle fits may fit in none of the angles tried).
                 let pieces = (long_m * texels_per_unit / limit_texels).ceil();
+                let fits = pieces <= 1.0 || !too_large(i).unwrap_or(true);
                 (!fits && pieces >= 2.0).then(|| {
                     (
                         i,
