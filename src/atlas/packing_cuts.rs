@@ -635,33 +635,28 @@ fn cut_to_pages(
     }
     for _ in 0..PAGE_CUT_ROUNDS {
         let inputs = pack_inputs(mesh, &current)?;
-        // Whether chart `i` fits an empty page in none of the packer's orientations.
-        let too_large = |i: usize| -> Option<bool> {
-            let (map, _) = current.maps[i].as_ref()?;
-            let chart = PackChart {
-                uv: &map.uv,
-                triangles: &inputs.triangles[i],
-                area_m2: inputs.area_m2[i],
-            };
-            too_large_for_a_page(&[chart], &options.pack, texels_per_unit)
-                .ok()
-                .and_then(|v| v.first().copied())
-        };
         let picks: Vec<(usize, Way)> = (0..current.segmentation.charts.len())
             .filter(|&i| !inputs.degenerate[i] && current.segmentation.charts[i].len() >= 2)
             .filter_map(|i| {
                 let (map, _) = current.maps[i].as_ref()?;
-                let [long_m, _] = box_sides_m(&PackChart {
+                let chart = PackChart {
                     uv: &map.uv,
                     triangles: &inputs.triangles[i],
                     area_m2: inputs.area_m2[i],
-                });
+                };
+                let [long_m, _] = box_sides_m(&chart);
+                // Whether the chart fits an empty page in none of the packer's orientations.
+                let too_large = || {
+                    too_large_for_a_page(&[chart], &options.pack, texels_per_unit)
+                        .ok()
+                        .and_then(|v| v.first().copied())
+                };
                 // A chart no longer than the pieces fits a page in any orientation (its
                 // rectangle's diagonal is at most 0.99 of the page side); a longer one is cut
                 // when no orientation of the packer fits it (a strip may still fit across the
                 // diagonal, and a chart whose rectangle fits may fit in none of the angles tried).
                 let pieces = (long_m * texels_per_unit / limit_texels).ceil();
-                let fits = pieces <= 1.0 || !too_large(i).unwrap_or(true);
+                let fits = pieces <= 1.0 || !too_large().unwrap_or(true);
                 (!fits && pieces >= 2.0).then(|| {
                     (
                         i,
