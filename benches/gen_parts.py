@@ -19,8 +19,9 @@ seventh): `long_tube` (15 m, 8 sides, 10 rings), `long_tubes_3` (10 to 16 m),
 `long_tubes_3_one_ring` and `long_plank_one_ring` (one triangle spans the whole length),
 `long_plank` (20 × 1 × 0.2 m, 10 segments), `long_plank_boxes` (with 5 unit cubes), `long_rails`
 (two 30 m rails and 30 posts) and `long_mixed_S` (12 random tubes, planks and boxes, 5 to 30 m). Needs numpy
-and the evaluator's directory (`--eval-dir`, default `$TEXATLAS_EVAL_DIR`, else `../shared/eval`) for
-its glTF writer.
+and the evaluator's directory (`--eval-dir`, default `$TEXATLAS_EVAL_DIR`, else `../shared/eval`; a
+relative path not found from the working directory is taken from the repository root) for its glTF
+writer.
 """
 import argparse
 import os
@@ -193,13 +194,32 @@ def asset(np, write, out_dir, kind, parts, seed, degenerate=0):
     write(os.path.join(out_dir, name), points.astype(np.float32), faces.astype(np.uint32).ravel())
 
 
+def eval_dir_of(given):
+    """The directory holding the evaluator's `gltf_write.py`: `given`, or when it is relative
+    and not found from the working directory, `given` from the repository root (so that the
+    default `../shared/eval` works from any directory). Exits with a message naming the paths
+    tried when neither holds it."""
+    tried = [os.path.abspath(given)]
+    if not os.path.isabs(given):
+        root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+        tried.append(os.path.normpath(os.path.join(root, given)))
+    for d in tried:
+        if os.path.isfile(os.path.join(d, "gltf_write.py")):
+            return d
+    sys.exit(
+        "gen_parts.py: no gltf_write.py in "
+        + " or ".join(tried)
+        + ": pass --eval-dir DIR (the evaluator's directory) or set TEXATLAS_EVAL_DIR"
+    )
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out_dir")
     ap.add_argument("--eval-dir", default=os.environ.get("TEXATLAS_EVAL_DIR", "../shared/eval"))
     ap.add_argument("--set", choices=["default", "large", "long"], default="default")
     a = ap.parse_args()
-    sys.path.insert(0, os.path.abspath(a.eval_dir))
+    sys.path.insert(0, eval_dir_of(a.eval_dir))
     import numpy as np
     from gltf_write import write_simple_glb
 
