@@ -31,7 +31,9 @@ pub(super) fn fit_to_page(
 }
 
 /// [`fit_to_page`], given up when its first trial (at the density the search starts from) does
-/// not fit: `Ok(None)` then, after that one trial. Otherwise the same search and result.
+/// not fit: `Ok(None)` then, after that one trial. Otherwise the same search and result; so
+/// also when that first trial ends the whole search ([`FitStart::Beat`] starting at its floor:
+/// [`PackError::DoesNotFit`], as [`fit_to_page`] would give after the same trial).
 pub(super) fn fit_to_page_unless_first_misses(
     ctx: &Context<'_, '_>,
     start: FitStart,
@@ -41,7 +43,7 @@ pub(super) fn fit_to_page_unless_first_misses(
 }
 
 /// The search of [`fit_to_page`]; with `give_up_at_first_miss`, `Ok(None)` when the first
-/// trial does not fit.
+/// trial does not fit and the search would go on.
 fn search_density(
     ctx: &Context<'_, '_>,
     start: FitStart,
@@ -124,12 +126,13 @@ fn search_density(
             ctx.run(d, false, &mut progress)?
         };
         let fitted = t.unplaced == 0;
+        if !fitted && beat.is_some_and(|b| d <= b) {
+            // Nothing above the density to beat fits where it was tried: the search ends here,
+            // given up or not.
+            break;
+        }
         if !fitted && give_up_at_first_miss && search.steps == 0 {
             return Ok(None);
-        }
-        if !fitted && beat.is_some_and(|b| d <= b) {
-            // Nothing above the density to beat fits where it was tried.
-            break;
         }
         let next = search.next(d, fitted, ratio_of(&t)).map(clamp_d);
         if fitted && fit.as_ref().is_none_or(|f| d > f.texels_per_unit) {

@@ -420,7 +420,10 @@ fn pack_charts_with(
     // exception: when the horizons' density would have ended within `FIT_TOLERANCE` below that
     // first trial's, hole filling used to start just above theirs; it starts at the first
     // trial's now, a search as good within its tolerance.) When hole filling does not fit there
-    // either, both searches run as below.
+    // either, both searches run as below. When the horizons' first trial is already their whole
+    // search (a search above `above` that misses at its floor: `DoesNotFit`), hole filling runs
+    // only below, as its whole search, and not first here (where it would pack the same first
+    // trial, then the horizons' search its one trial again).
     let first_hole_order;
     let first =
         if options.density == TexelDensity::FitToPage && order.len() >= HOLE_SCORED_MIN_CHARTS {
@@ -435,8 +438,10 @@ fn pack_charts_with(
                     // Where hole filling would start after the horizons (their density is below
                     // this first trial's, and never the floor of a search that fits at once).
                     let from = FitStart::Beat(above.unwrap_or(0.0));
-                    if let Some(t) = fit_to_page_unless_first_misses(&ctx, from, monitor)? {
-                        return Ok(ctx.output(&t));
+                    match fit_to_page_unless_first_misses(&ctx, from, monitor) {
+                        Ok(Some(t)) => return Ok(ctx.output(&t)),
+                        Ok(None) | Err(PackError::DoesNotFit { .. }) => {}
+                        Err(e) => return Err(e),
                     }
                     ctx.holes = false;
                     ctx.scored = false;

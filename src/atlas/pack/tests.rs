@@ -688,6 +688,56 @@ fn a_failing_hole_filling_trial_counts_only_the_charts_it_could_not_place() {
 }
 
 #[test]
+fn a_search_above_a_density_that_misses_at_its_floor_ends_after_that_trial() {
+    // A search above a density (`FitStart::Beat`) whose first trial, at its floor, does not
+    // fit ends there, whether it gives up at a first miss or not: both say `DoesNotFit` after
+    // that one trial (so `pack_charts_with` runs no search twice). From a floor below what fits,
+    // both find the same packing.
+    let charts = mixed_set(40, 5);
+    let borrowed = as_pack_charts(&charts);
+    let options = PackOptions::default();
+    let (prepared, order, total) = prepared_in_order(&borrowed);
+    let page = [options.width_texels, options.height_texels];
+    let too_dense = fill_density(total, page) * (2.0 / FIT_START_FILL).sqrt();
+    let mut quiet = |_: (usize, usize)| ControlFlow::Continue(());
+    for holes in [false, true] {
+        let ctx = || Context {
+            holes,
+            scored: holes,
+            ..Context::new(&borrowed, &prepared, &order, &options)
+        };
+        let trials = |c: &Context<'_, '_>| c.trials.load(std::sync::atomic::Ordering::Relaxed);
+        let (given_up, whole) = (ctx(), ctx());
+        let r = fit_to_page_unless_first_misses(&given_up, FitStart::Beat(too_dense), &mut quiet);
+        assert!(
+            matches!(r, Err(PackError::DoesNotFit { .. })),
+            "holes {holes}: {:?}",
+            r.as_ref().err()
+        );
+        let r = fit_to_page(&whole, FitStart::Beat(too_dense), &mut quiet);
+        assert!(
+            matches!(r, Err(PackError::DoesNotFit { .. })),
+            "holes {holes}: {:?}",
+            r.as_ref().err()
+        );
+        assert_eq!((trials(&given_up), trials(&whole)), (1, 1), "holes {holes}");
+        // From a floor that fits: the same search, the same packing.
+        let low = fill_density(total, page) * 0.5;
+        let (a, b) = (ctx(), ctx());
+        let given_up = fit_to_page_unless_first_misses(&a, FitStart::Beat(low), &mut quiet)
+            .unwrap()
+            .unwrap();
+        let whole = fit_to_page(&b, FitStart::Beat(low), &mut quiet).unwrap();
+        assert_eq!(
+            (given_up.texels_per_unit, format!("{:?}", given_up.placed)),
+            (whole.texels_per_unit, format!("{:?}", whole.placed)),
+            "holes {holes}"
+        );
+        assert_eq!(trials(&a), trials(&b), "holes {holes}");
+    }
+}
+
+#[test]
 fn one_page_at_a_fixed_density_is_packed_with_every_guarantee_or_refused() {
     // Below the fit-to-page density every chart fits one page, with every guarantee and at
     // exactly that density; far above it nothing fits and the answer is None.
