@@ -366,14 +366,20 @@ pub(super) fn cut_for_packing(
             } else {
                 &[Way::Neck, Way::Diameter]
             };
+            let mut missed: Option<parameterize::ParameterizedCharts> = None;
             for &way in ways {
                 let candidate = cut(&state.current, &[(pick, way)], low_poly)?;
+                // The same charts as the way before (the neck is the diameter) pack the same.
+                if missed.as_ref() == Some(&candidate) {
+                    continue;
+                }
                 if let Some((eff, packing)) = try_candidate(&candidate, state.best)? {
                     state.kept(candidate, eff, packing);
                     waste = wastes(&state.current)?;
                     tried.clear();
                     break;
                 }
+                missed = Some(candidate);
             }
         }
         Ok(state)
