@@ -22,34 +22,59 @@ pub(super) fn fit_to_page(
     start: FitStart,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
 ) -> Result<Trial, PackError> {
-    // Only a search that gives up at its first miss returns no trial.
-    search_density(ctx, start, monitor, false)?.ok_or_else(|| PackError::DoesNotFit {
-        charts: ctx.order.len(),
-        page_texels: ctx.page(),
-        padding_texels: ctx.options.padding_texels,
-    })
+    fit_to_page_after(ctx, start, None, monitor)
+}
+
+/// [`fit_to_page`] whose first trial is `missed` when that is a trial at the density the search
+/// starts from (one that did not fit, as [`fit_to_page_unless_first_misses`] gives it back, of
+/// the same context): it is not packed again. The same search and result.
+pub(super) fn fit_to_page_after(
+    ctx: &Context<'_, '_>,
+    start: FitStart,
+    missed: Option<Trial>,
+    monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
+) -> Result<Trial, PackError> {
+    match search_density(ctx, start, monitor, false, missed)? {
+        FirstTry::Found(t) => Ok(t),
+        // Only a search that gives up at its first miss returns no packing.
+        FirstTry::Missed(_) => Err(PackError::DoesNotFit {
+            charts: ctx.order.len(),
+            page_texels: ctx.page(),
+            padding_texels: ctx.options.padding_texels,
+        }),
+    }
+}
+
+/// What [`fit_to_page_unless_first_misses`] found.
+pub(super) enum FirstTry {
+    /// The packing of the whole search.
+    Found(Trial),
+    /// The search's first trial, which did not fit: the search gave up there
+    /// ([`fit_to_page_after`] goes on from it).
+    Missed(Trial),
 }
 
 /// [`fit_to_page`], given up when its first trial (at the density the search starts from) does
-/// not fit: `Ok(None)` then, after that one trial. Otherwise the same search and result; so
-/// also when that first trial ends the whole search ([`FitStart::Beat`] starting at its floor:
-/// [`PackError::DoesNotFit`], as [`fit_to_page`] would give after the same trial).
+/// not fit: [`FirstTry::Missed`] then, after that one trial. Otherwise the same search and
+/// result; so also when that first trial ends the whole search ([`FitStart::Beat`] starting at
+/// its floor: [`PackError::DoesNotFit`], as [`fit_to_page`] would give after the same trial).
 pub(super) fn fit_to_page_unless_first_misses(
     ctx: &Context<'_, '_>,
     start: FitStart,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
-) -> Result<Option<Trial>, PackError> {
-    search_density(ctx, start, monitor, true)
+) -> Result<FirstTry, PackError> {
+    search_density(ctx, start, monitor, true, None)
 }
 
-/// The search of [`fit_to_page`]; with `give_up_at_first_miss`, `Ok(None)` when the first
-/// trial does not fit and the search would go on.
+/// The search of [`fit_to_page_after`]; with `give_up_at_first_miss`, [`FirstTry::Missed`]
+/// when the first trial does not fit and the search would go on.
 fn search_density(
     ctx: &Context<'_, '_>,
     start: FitStart,
     monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>,
     give_up_at_first_miss: bool,
-) -> Result<Option<Trial>, PackError> {
+    mut missed: Option<Trial>,
+) -> Result<FirstTry, PackError> {
     let [w, h] = ctx.page();
     let mut progress = Steps::new(monitor, ctx.order.len() * (MAX_FIT_TRIALS + FIT_PROBES + 1));
     let total_area: f64 = ctx.order.iter().map(|&i| ctx.prepared[i].area_m2).sum();
@@ -63,9 +88,9 @@ fn search_density(
         let t = ctx.run(1.0, false, &mut progress)?;
         progress.finish()?;
         return if t.unplaced == 0 {
-            Ok(Some(t))
+            Ok(FirstTry::Found(t))
         } else if give_up_at_first_miss {
-            Ok(None)
+            Ok(FirstTry::Missed(t))
         } else {
             Err(does_not_fit())
         };
@@ -120,7 +145,13 @@ fn search_density(
         // Once a density is known to fit (or when a failure here ends the search), a trial
         // that does not fit only closes the bracket: the search does not read how much did not
         // fit (`FitSearch::next` bisects), so hole filling need not go on past its first miss.
-        let t = if fit.is_some() || beat.is_some_and(|b| d <= b) {
+        // (The caller's missed trial, when it is this first one, is not packed again.)
+        let known = missed
+            .take()
+            .filter(|m| m.texels_per_unit == d && m.unplaced > 0);
+        let t = if let Some(m) = known {
+            m
+        } else if fit.is_some() || beat.is_some_and(|b| d <= b) {
             ctx.run_to_first_miss(d, &mut progress)?
         } else {
             ctx.run(d, false, &mut progress)?
@@ -132,7 +163,7 @@ fn search_density(
             break;
         }
         if !fitted && give_up_at_first_miss && search.steps == 0 {
-            return Ok(None);
+            return Ok(FirstTry::Missed(t));
         }
         let next = search.next(d, fitted, ratio_of(&t)).map(clamp_d);
         if fitted && fit.as_ref().is_none_or(|f| d > f.texels_per_unit) {
@@ -164,7 +195,7 @@ fn search_density(
         }
     };
     progress.finish()?;
-    Ok(Some(t))
+    Ok(FirstTry::Found(t))
 }
 
 /// The density at which charts of `total_area_m2` would cover [`FIT_START_FILL`] of a page of

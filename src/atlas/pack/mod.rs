@@ -82,7 +82,7 @@ pub mod placement;
 mod types;
 
 pub use cache::PackCache;
-use fit::{fit_to_page, fit_to_page_unless_first_misses, FitStart};
+use fit::{fit_to_page, fit_to_page_after, fit_to_page_unless_first_misses, FirstTry, FitStart};
 pub use fit::{FIT_GUESS_GROWTH, FIT_START_FILL};
 pub use one_page::pack_one_page;
 pub use types::{
@@ -360,8 +360,11 @@ fn pack_charts_with(
     let order = largest_first(&prepared);
     let mut ctx = Context::new(charts, &prepared, &order, options);
     ctx.cache = cache.zip(ids.as_deref());
+    // The first packer's or hole filling's search; `missed`, a trial of the same search given
+    // up at its first miss, is not packed again (`fit::fit_to_page_after`).
     let pack = |ctx: &Context<'_, '_>,
                 start: FitStart,
+                missed: Option<Trial>,
                 monitor: &mut dyn FnMut((usize, usize)) -> ControlFlow<()>|
      -> Result<Trial, PackError> {
         match options.density {
@@ -371,7 +374,7 @@ fn pack_charts_with(
                 progress.finish()?;
                 Ok(t)
             }
-            TexelDensity::FitToPage => fit_to_page(ctx, start, monitor),
+            TexelDensity::FitToPage => fit_to_page_after(ctx, start, missed, monitor),
         }
     };
     if options.first_packer == FirstPacker::HoleFilling
@@ -420,16 +423,21 @@ fn pack_charts_with(
     // exception: when the horizons' density would have ended within `FIT_TOLERANCE` below that
     // first trial's, hole filling used to start just above theirs; it starts at the first
     // trial's now, a search as good within its tolerance.) When hole filling does not fit there
-    // either, both searches run as below. When the horizons' first trial is already their whole
-    // search (a search above `above` that misses at its floor: `DoesNotFit`), hole filling runs
-    // only below, as its whole search, and not first here (where it would pack the same first
-    // trial, then the horizons' search its one trial again).
+    // either, both searches run as below, each from its first trial (not packed again). When
+    // the horizons' first trial is already their whole search (a search above `above` that
+    // misses at its floor: `DoesNotFit`), hole filling runs only below, as its whole search, and
+    // not first here (where it would pack the same first trial, then the horizons' search its
+    // one trial again).
     let first_hole_order;
+    // The first trials of the two searches when they were given up there: the whole searches
+    // below start from them.
+    let (mut horizons_missed, mut holes_missed) = (None, None);
     let first =
         if options.density == TexelDensity::FitToPage && order.len() >= HOLE_SCORED_MIN_CHARTS {
             match fit_to_page_unless_first_misses(&ctx, start, monitor) {
-                Ok(Some(t)) => Some(Some(t)),
-                Ok(None) => {
+                Ok(FirstTry::Found(t)) => Some(Some(t)),
+                Ok(FirstTry::Missed(missed)) => {
+                    horizons_missed = Some(missed);
                     first_hole_order =
                         padded_box_order(charts, &prepared, &order, options, total_area_m2);
                     ctx.holes = true;
@@ -439,8 +447,9 @@ fn pack_charts_with(
                     // this first trial's, and never the floor of a search that fits at once).
                     let from = FitStart::Beat(above.unwrap_or(0.0));
                     match fit_to_page_unless_first_misses(&ctx, from, monitor) {
-                        Ok(Some(t)) => return Ok(ctx.output(&t)),
-                        Ok(None) | Err(PackError::DoesNotFit { .. }) => {}
+                        Ok(FirstTry::Found(t)) => return Ok(ctx.output(&t)),
+                        Ok(FirstTry::Missed(missed)) => holes_missed = Some(missed),
+                        Err(PackError::DoesNotFit { .. }) => {}
                         Err(e) => return Err(e),
                     }
                     ctx.holes = false;
@@ -455,7 +464,7 @@ fn pack_charts_with(
         };
     let mut trial = match first {
         Some(t) => t,
-        None => found(pack(&ctx, start, monitor))?,
+        None => found(pack(&ctx, start, horizons_missed.take(), monitor))?,
     };
     // Hole filling ([`hole`]) where the horizons leave much of the page empty: fit-to-page
     // below `HOLE_FILL_BELOW` (`HOLE_FILL_BELOW_FEW_CHARTS` with few charts), or a fixed
@@ -487,7 +496,8 @@ fn pack_charts_with(
         // Hole filling is kept only when it packs denser than the horizons: its search starts
         // just above their density (the caller's, when they found none above it) and gives up
         // when that does not fit.
-        match pack(&ctx, FitStart::Beat(floor.unwrap_or(0.0)), &mut at_end) {
+        let from = FitStart::Beat(floor.unwrap_or(0.0));
+        match pack(&ctx, from, holes_missed.take(), &mut at_end) {
             Ok(t) => {
                 let better = match (options.density, &trial) {
                     (_, None) => true,

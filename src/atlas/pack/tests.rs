@@ -688,11 +688,12 @@ fn a_failing_hole_filling_trial_counts_only_the_charts_it_could_not_place() {
 }
 
 #[test]
-fn a_search_above_a_density_that_misses_at_its_floor_ends_after_that_trial() {
+fn a_search_given_up_at_its_first_miss_is_the_whole_search_trial_for_trial() {
     // A search above a density (`FitStart::Beat`) whose first trial, at its floor, does not
     // fit ends there, whether it gives up at a first miss or not: both say `DoesNotFit` after
     // that one trial (so `pack_charts_with` runs no search twice). From a floor below what fits,
-    // both find the same packing.
+    // both find the same packing. A search given up elsewhere gives its trial back, and the
+    // whole search goes on from it.
     let charts = mixed_set(40, 5);
     let borrowed = as_pack_charts(&charts);
     let options = PackOptions::default();
@@ -724,9 +725,11 @@ fn a_search_above_a_density_that_misses_at_its_floor_ends_after_that_trial() {
         // From a floor that fits: the same search, the same packing.
         let low = fill_density(total, page) * 0.5;
         let (a, b) = (ctx(), ctx());
-        let given_up = fit_to_page_unless_first_misses(&a, FitStart::Beat(low), &mut quiet)
-            .unwrap()
-            .unwrap();
+        let Ok(FirstTry::Found(given_up)) =
+            fit_to_page_unless_first_misses(&a, FitStart::Beat(low), &mut quiet)
+        else {
+            panic!("holes {holes}: nothing found above {low}");
+        };
         let whole = fit_to_page(&b, FitStart::Beat(low), &mut quiet).unwrap();
         assert_eq!(
             (given_up.texels_per_unit, format!("{:?}", given_up.placed)),
@@ -734,6 +737,26 @@ fn a_search_above_a_density_that_misses_at_its_floor_ends_after_that_trial() {
             "holes {holes}"
         );
         assert_eq!(trials(&a), trials(&b), "holes {holes}");
+        // From a guess too dense, the given-up search gives its first trial back, and the whole
+        // search from it finds the same packing without packing that trial again.
+        let guess = FitStart::Guess(whole.texels_per_unit * 1.3);
+        let (a, b, c) = (ctx(), ctx(), ctx());
+        let Ok(FirstTry::Missed(missed)) = fit_to_page_unless_first_misses(&a, guess, &mut quiet)
+        else {
+            panic!("holes {holes}: the guess fits");
+        };
+        let after = fit_to_page_after(&b, guess, Some(missed), &mut quiet).unwrap();
+        let whole = fit_to_page(&c, guess, &mut quiet).unwrap();
+        assert_eq!(
+            (after.texels_per_unit, format!("{:?}", after.placed)),
+            (whole.texels_per_unit, format!("{:?}", whole.placed)),
+            "holes {holes}"
+        );
+        assert_eq!(
+            (trials(&a), trials(&b) + 1),
+            (1, trials(&c)),
+            "holes {holes}"
+        );
     }
 }
 
@@ -1062,7 +1085,7 @@ fn many_charts_skip_the_horizons_search_where_hole_filling_fits_at_its_start() {
         let horizons = fit_to_page(&horizons_ctx, FitStart::Fill, &mut quiet()).unwrap();
         let first =
             fit_to_page_unless_first_misses(&horizons_ctx, FitStart::Fill, &mut quiet()).unwrap();
-        if let Some(t) = &first {
+        if let FirstTry::Found(t) = &first {
             // A first trial that fits: the search goes on as `fit_to_page`'s.
             assert_eq!(t.texels_per_unit, horizons.texels_per_unit, "{what}");
             continue;
@@ -1077,9 +1100,8 @@ fn many_charts_skip_the_horizons_search_where_hole_filling_fits_at_its_start() {
         };
         // Hole filling at the fill density, and its search after the horizons.
         let fits_at_fill =
-            fit_to_page_unless_first_misses(&hole_ctx, FitStart::Beat(0.0), &mut quiet())
-                .unwrap()
-                .is_some();
+            fit_to_page_unless_first_misses(&hole_ctx, FitStart::Beat(0.0), &mut quiet()).unwrap();
+        let fits_at_fill = matches!(fits_at_fill, FirstTry::Found(_));
         if !fits_at_fill {
             // Both searches run, as without the skip: never below the horizons.
             fell_back += 1;
