@@ -1060,3 +1060,36 @@ fn near_coincident_ends_of_a_zero_area_face_are_joined_and_only_those() {
         b.mesh.face_vertices(FaceId(2))[1]
     );
 }
+
+/// A zero-area face of the weld rule whose short edge is a real edge of the surface (a needle
+/// to one stray vertex far away: zero-area relative to its own length) keeps that edge's ends
+/// apart: they are near-coincident beside the needle, not beside the faces of area around them.
+/// (A vertex moved to 1e38 in a scanned ball joined two vertices 0.4 apart and collapsed the
+/// faces of area between them.)
+#[test]
+fn a_needle_to_a_far_vertex_does_not_join_a_real_edge() {
+    let needle = |far: f64| {
+        MeshInput::single_group(
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [far, -0.5, 0.0],
+            ],
+            vec![[0, 1, 2], [0, 2, 3], [1, 0, 4]],
+        )
+    };
+    for far in [1e12, 1e38] {
+        let b = build_ok(&needle(far));
+        assert_eq!(b.mesh.face_degeneracy(FaceId(0)), None, "{far}");
+        assert_eq!(b.mesh.face_degeneracy(FaceId(1)), None, "{far}");
+        assert_eq!(
+            b.mesh.face_degeneracy(FaceId(2)),
+            Some(DegenerateKind::ZeroArea),
+            "{far}"
+        );
+        assert_eq!(b.num_welded_vertices, 5, "{far}");
+        assert!(!b.mesh.has_moved_sources(), "{far}");
+    }
+}
