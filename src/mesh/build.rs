@@ -12,9 +12,9 @@
 //!    each run of equal hashes is confirmed (or, on a collision, split) by the full key, and each
 //!    group of equal keys becomes one welded vertex, named by its lowest source index.
 //! 3. Degenerate faces: repeated welded vertex, or zero area (`geometry::triangle_is_zero_area`).
-//!    The ends of a near-zero-length edge of a zero-area face (beside that face and beside the
-//!    faces of area at its ends) are joined (union-find, each group named by its lowest source
-//!    index; [`NEAR_WELD_RELATIVE`]), and the faces classified again.
+//!    The ends of a near-zero-length edge of a zero-area face that no face of area has both of
+//!    are joined (union-find, each group named by its lowest source index;
+//!    [`NEAR_WELD_RELATIVE`]), and the faces classified again.
 //!    Faces with a repeated vertex are isolated (their corners become vertices of their own).
 //! 4. Group half-edges by undirected welded edge (bucket by lower end, sort each bucket) and glue:
 //!    exactly one half-edge each way → glued; otherwise repair (pair greedily or cut) and report.
@@ -58,32 +58,25 @@ pub struct BuiltMesh {
     pub num_welded_vertices: usize,
 }
 
-/// An edge of a zero-area face at most this fraction of the face's longest edge, and of the
-/// longest edge of the smallest face of area at either end, joins its two ends (the module doc
-/// of [`crate::mesh`], "Weld rule").
+/// An edge of a zero-area face at most this fraction of the face's longest edge joins its two
+/// ends, unless a face of area has both (the module doc of [`crate::mesh`], "Weld rule").
 pub const NEAR_WELD_RELATIVE: f64 = 1e-9;
 
-/// The squared lengths of the edges `k → k + 1` of the triangle `p`.
-fn edge_lengths_sq(p: &[[f64; 3]; 3]) -> [f64; 3] {
+/// The corner `k` whose edge to corner `k + 1` is the shortest of the triangle `p` when that
+/// edge is at most [`NEAR_WELD_RELATIVE`] of the longest (ties: the lowest `k`); `None`
+/// otherwise, or when the triangle has no length at all (every corner equal).
+fn near_coincident_edge(p: &[[f64; 3]; 3]) -> Option<usize> {
     let len2 = |a: [f64; 3], b: [f64; 3]| {
         let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
         d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
     };
-    [len2(p[0], p[1]), len2(p[1], p[2]), len2(p[2], p[0])]
-}
-
-/// The corner `k` whose edge to corner `k + 1` is the shortest of the triangle `p` when that
-/// edge is at most [`NEAR_WELD_RELATIVE`] of the longest (ties: the lowest `k`), with that
-/// edge's squared length; `None` otherwise, or when the triangle has no length at all (every
-/// corner equal).
-fn near_coincident_edge(p: &[[f64; 3]; 3]) -> Option<(usize, f64)> {
-    let l = edge_lengths_sq(p);
+    let l = [len2(p[0], p[1]), len2(p[1], p[2]), len2(p[2], p[0])];
     let longest = l[0].max(l[1]).max(l[2]);
     if !(longest > 0.0 && longest.is_finite()) {
         return None;
     }
     let k = (0..3).min_by(|&a, &b| l[a].total_cmp(&l[b]))?;
-    (l[k] <= NEAR_WELD_RELATIVE * NEAR_WELD_RELATIVE * longest).then_some((k, l[k]))
+    (l[k] <= NEAR_WELD_RELATIVE * NEAR_WELD_RELATIVE * longest).then_some(k)
 }
 
 /// `-0.0` and `0.0` weld together: compare bits of the coordinate with the sign of zero cleared.
@@ -191,46 +184,48 @@ impl TriangleMesh {
         };
         let mut face_degeneracy = degeneracy(&wv);
         // 3b. Near-coincident ends of a zero-area face (the module doc of `crate::mesh`).
-        let candidates: Vec<(u32, u32, f64)> = face_degeneracy
+        let candidates: Vec<(u32, u32)> = face_degeneracy
             .par_iter()
             .enumerate()
             .filter(|(_, k)| **k == Some(DegenerateKind::ZeroArea))
             .filter_map(|(f, _)| {
-                let (k, len_sq) = near_coincident_edge(&tris[f].map(|i| pos[i as usize]))?;
+                let k = near_coincident_edge(&tris[f].map(|i| pos[i as usize]))?;
                 let (a, b) = (tris[f][k], tris[f][(k + 1) % 3]);
-                (input.weld_group[a as usize] == input.weld_group[b as usize]).then_some((
-                    wv[3 * f + k],
-                    wv[3 * f + (k + 1) % 3],
-                    len_sq,
-                ))
+                (input.weld_group[a as usize] == input.weld_group[b as usize])
+                    .then_some((wv[3 * f + k], wv[3 * f + (k + 1) % 3]))
             })
             .collect();
-        // ... and near-coincident beside the faces of area around them too: an end's nearest
-        // scale is the shortest longest edge of its faces of area. (A needle face to one stray
-        // far vertex is zero-area relative to its own length, and its short edge may be a real
-        // edge of the surface: its ends stay apart.)
+        // ... unless a face of area has both ends: the join would make it a repeated-vertex
+        // face, collapsed, where the file gives it area. (A needle face to one stray far vertex
+        // is zero-area relative to its own length, and its short edge may be a real edge of the
+        // surface.)
         let joins: Vec<(u32, u32)> = if candidates.is_empty() {
             Vec::new()
         } else {
-            let mut scale_sq = vec![f64::INFINITY; ns];
+            let mut pairs: Vec<(u32, u32)> = candidates
+                .iter()
+                .map(|&(a, b)| (a.min(b), a.max(b)))
+                .collect();
+            pairs.sort_unstable();
+            pairs.dedup();
+            let mut blocked = vec![false; pairs.len()];
             for (f, kind) in face_degeneracy.iter().enumerate() {
                 if kind.is_none() {
-                    let l = edge_lengths_sq(&tris[f].map(|i| pos[i as usize]));
-                    let longest = l[0].max(l[1]).max(l[2]);
-                    for &v in &wv[3 * f..3 * f + 3] {
-                        let m = &mut scale_sq[v as usize];
-                        *m = m.min(longest);
+                    for k in 0..3 {
+                        let (a, b) = (wv[3 * f + k], wv[3 * f + (k + 1) % 3]);
+                        if let Ok(i) = pairs.binary_search(&(a.min(b), a.max(b))) {
+                            blocked[i] = true;
+                        }
                     }
                 }
             }
-            let near = NEAR_WELD_RELATIVE * NEAR_WELD_RELATIVE;
             candidates
                 .into_iter()
-                .filter(|&(a, b, len_sq)| {
-                    let scale = scale_sq[a as usize].min(scale_sq[b as usize]);
-                    scale == f64::INFINITY || len_sq <= near * scale
+                .filter(|&(a, b)| {
+                    pairs
+                        .binary_search(&(a.min(b), a.max(b)))
+                        .is_ok_and(|i| !blocked[i])
                 })
-                .map(|(a, b, _)| (a, b))
                 .collect()
         };
         let joined = !joins.is_empty();

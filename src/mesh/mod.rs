@@ -13,10 +13,10 @@
 //! `weld_group` is equal. No distance tolerance in general: nearly coincident vertices stay apart,
 //! as an asset may model a crack or a gap that thin on purpose. One exception: the two ends of
 //! an edge of a zero-area face (three distinct, collinear vertices) that is at most
-//! [`NEAR_WELD_RELATIVE`] (1e-9) of the face's longest edge, and of the longest edge of the
-//! smallest face of area at either end (when an end has one), are one vertex too (same
-//! `weld_group`), joined transitively. (The second bound keeps a real edge of the surface whole
-//! when its face is a needle to one stray vertex far away.) Such a face is a slit between coincident copies of a
+//! [`NEAR_WELD_RELATIVE`] (1e-9) of the face's longest edge are one vertex too (same
+//! `weld_group`), joined transitively, unless a face of area has both ends (the join would
+//! collapse it where the file gives it area: a real edge of the surface whose zero-area face
+//! is a needle to one stray vertex far away, or a thin face between the two). Such a face is a slit between coincident copies of a
 //! vertex whose coordinates differ by rounding (the poles of a UV sphere computed as
 //! `sin(π) ≈ 1.2e-16`); without the join the faces around the copies meet only through the slits,
 //! their chart flattens each copy apart, and the written atlas splits there into pieces that

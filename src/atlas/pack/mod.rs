@@ -864,7 +864,7 @@ impl<'c, 'a> Context<'c, 'a> {
                         let needed = orients
                             .iter()
                             .map(|o| [o.width_texels as u64, o.height_texels as u64])
-                            .min_by_key(|d| (d[0].max(d[1]), d[0] * d[1]))
+                            .min_by_key(|d| (d[0].max(d[1]), d[0].saturating_mul(d[1])))
                             .unwrap_or([0, 0]);
                         return Err(PackError::ChartTooLarge {
                             chart: i,
