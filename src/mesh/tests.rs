@@ -1063,9 +1063,8 @@ fn near_coincident_ends_of_a_zero_area_face_are_joined_and_only_those() {
 
 /// A zero-area face of the weld rule whose short edge is a real edge of the surface (a needle
 /// to one stray vertex far away: zero-area relative to its own length) keeps that edge's ends
-/// apart: they are near-coincident beside the needle, not beside the faces of area around them.
-/// (A vertex moved to 1e38 in a scanned ball joined two vertices 0.4 apart and collapsed the
-/// faces of area between them.)
+/// apart: a face of area has both. (A vertex moved to 1e38 in a scanned ball joined two
+/// vertices 0.4 apart and collapsed the faces of area between them.)
 #[test]
 fn a_needle_to_a_far_vertex_does_not_join_a_real_edge() {
     let needle = |far: f64| {
