@@ -16,14 +16,15 @@
 //! [`NEAR_WELD_RELATIVE`] (1e-9) of the face's longest edge are one vertex too (same
 //! `weld_group`), joined transitively, unless a face of area has both ends (the join would
 //! collapse it where the file gives it area: a real edge of the surface whose zero-area face
-//! is a needle to one stray vertex far away, or a thin face between the two). Such a face is a slit between coincident copies of a
-//! vertex whose coordinates differ by rounding (the poles of a UV sphere computed as
-//! `sin(π) ≈ 1.2e-16`); without the join the faces around the copies meet only through the slits,
-//! their chart flattens each copy apart, and the written atlas splits there into pieces that
-//! keep no padding between them. The asset's positions are never changed: only the connectivity
-//! the pipeline works on. Every vertex of a joined group, the copies in isolated faces too, sits
-//! at the group's position (its lowest source's), and each corner keeps its own
-//! ([`TriangleMesh::corner_position`]), by which the report keys corners as the evaluator does.
+//! is a needle to one stray vertex far away, or a thin face between the two). The zero-area
+//! face the rule is for is a slit between coincident copies of a vertex whose coordinates differ by rounding (the poles of
+//! a UV sphere computed as `sin(π) ≈ 1.2e-16`); without the join the faces around the copies
+//! meet only through the slits, their chart flattens each copy apart, and the written atlas
+//! splits there into pieces that keep no padding between them. The asset's positions are never
+//! changed: only the connectivity the pipeline works on. Every vertex of a joined group, the
+//! copies in isolated faces too, sits at the group's position (its lowest source's), and each
+//! corner keeps its own ([`TriangleMesh::corner_position`]), by which the report keys corners as
+//! the evaluator does.
 //!
 //! # Repair policy
 //! Fatal (a [`MeshBuildError`], nothing built): zero triangles, `weld_group` length mismatch,

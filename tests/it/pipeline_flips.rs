@@ -1,8 +1,9 @@
 //! The flip promise on defective meshes (issue 22 item 5): generated meshes with degenerate
 //! (zero-area, repeated-vertex), near-degenerate (slivers, needles, heights down to 1e-9 of an
-//! edge, needles to a stray vertex 1e15 or 1e30 away) and non-manifold parts (fins, duplicated and reversed faces, bowties) go through
-//! `atlas::generate`, and neither the report nor an independent recomputation from the `f32`
-//! corner UVs finds a flipped face or a face that is degenerate in UV but has 3-D area.
+//! edge, needles to a stray vertex 1e15 or 1e30 away) and non-manifold parts (fins, duplicated
+//! and reversed faces, bowties) go through `atlas::generate`, and neither the report nor an
+//! independent recomputation from the `f32` corner UVs finds a flipped face or a face that is
+//! degenerate in UV but has 3-D area.
 //!
 //! The recomputation here follows the evaluator's definitions (`../shared/eval/atlas_eval.py`:
 //! "degenerate", "Charts", "Orientation") with its own union-find over corner keys, not the
@@ -377,12 +378,12 @@ fn needles_rounded_across_their_neighbours_are_split_off_until_none_is_left() {
     assert_clean(&mesh, &atlas);
 }
 
-/// A cylinder whose needle end lies 4e-15 from a corner, inside a face of area 4e-8 long that
-/// has both. The weld used to join them (the ends of a zero-area face): the chart was flattened
-/// as one piece, but in the file two of its faces met the rest only through that copy, and the
-/// report's charts (as the evaluator's) saw two charts side by side with no padding (476
-/// violation texels), until the guard split the torn part off. Now the face of area keeps the
-/// two apart (the weld rule), and the atlas keeps every promise.
+/// A cylinder whose needle end lies 4e-15 from a corner, beside faces of area as short as 4e-8,
+/// one of which has both. The weld used to join them (the ends of a zero-area face): the chart
+/// was flattened as one piece, but in the file two of its faces met the rest only through that
+/// copy, and the report's charts (as the evaluator's) saw two charts side by side with no
+/// padding (476 violation texels), until the guard split the torn part off. Now the face of
+/// area keeps the two apart (the weld rule), and the atlas keeps every promise.
 #[test]
 fn a_needle_end_beside_a_corner_of_a_face_of_area_stays_apart_and_keeps_its_padding() {
     let (mesh, atlas) = generated(
