@@ -34,7 +34,7 @@
 //! candidates are both ends of every run of fitting positions on the rows whose grid ends at
 //! most [`CANDIDATE_ROWS`] after `E`, and the winner has the highest score `2 · contact −
 //! (y + height − E)`, where the contact counts the texels at distance 1 outside `D` that are
-//! occupied or outside the box (the ring of `ring_runs`: where the chart's padded outline
+//! occupied or outside the box (the ring of `RingBits::around`: where the chart's padded outline
 //! touches placed charts or the page edge); ties by `(y + height, x, orientation)`. Best fit
 //! by contact, near the top: small charts go to the gaps they fill snugly and leave the wide
 //! ones to charts that need them. Deterministic, and exhaustive (every position of the
@@ -457,7 +457,7 @@ impl Occupancy {
                     return Vec::new();
                 };
                 let h = o.height_texels as i32;
-                let ring = RingBits::new(&ring_runs(&rows, h));
+                let ring = RingBits::around(&rows);
                 near.into_iter()
                     .map(|(end, x)| (end, x, k, self.contact_bits(bbox, &ring, x, end - h)))
                     .collect()
@@ -478,9 +478,9 @@ impl Occupancy {
     }
 
     /// Texels of the ring `ring` (runs `(row, first, last)` relative to a grid origin, see
-    /// [`ring_runs`]) placed at grid origin `(x, y)` that are occupied or outside `bbox`: how
-    /// much of the chart's padded outline touches placed charts or the page edge. The
-    /// reference of [`Self::contact_bits`], which the search uses.
+    /// `tests::ring_runs`) placed at grid origin `(x, y)` that are occupied or outside
+    /// `bbox`: how much of the chart's padded outline touches placed charts or the page edge.
+    /// The reference of [`Self::contact_bits`], which the search uses.
     #[cfg(test)]
     fn contact(&self, bbox: [i32; 4], ring: &[(i32, i32, i32)], x: i32, y: i32) -> i64 {
         let [x0, y0, x1, y1] = bbox;
@@ -863,11 +863,12 @@ fn hull_rows(d: &super::place::Extents) -> Vec<(i32, i32, i32)> {
         .collect()
 }
 
-/// A ring (runs `(row, first, last)` relative to a grid origin, see [`ring_runs`]) as one bit
-/// string per row that has texels: bit `j` of a row is column `left + j`.
+/// A ring (the texels at distance 1 outside a set, relative to a grid origin,
+/// [`RingBits::around`]) as one bit string per row that has texels: bit `j` of a row is
+/// column `left + j`.
 #[derive(Debug, Clone)]
 struct RingBits {
-    /// Least column of any run.
+    /// The column of bit 0.
     left: i32,
     /// Words per row.
     words: usize,
@@ -877,82 +878,76 @@ struct RingBits {
 }
 
 impl RingBits {
-    /// The ring of disjoint runs `ring` (as [`ring_runs`] returns them).
-    fn new(ring: &[(i32, i32, i32)]) -> Self {
-        let left = ring.iter().map(|t| t.1).min().unwrap_or(0);
-        let right = ring.iter().map(|t| t.2).max().unwrap_or(0);
-        let top = ring.iter().map(|t| t.0).min().unwrap_or(0);
-        let bottom = ring.iter().map(|t| t.0).max().unwrap_or(-1);
-        let words = ((right - left + 1).max(1) as usize).div_ceil(64);
-        let height = (bottom - top + 1).max(0) as usize;
-        let mut all_rows: Vec<(i32, u32)> = (0..height).map(|q| (top + q as i32, 0)).collect();
-        let mut all_bits = vec![0u64; height * words];
-        for &(r, a, b) in ring {
-            let q = (r - top) as usize;
+    /// The ring of the set of runs `rows` (`(row, first, last)`, disjoint): the texels at
+    /// Chebyshev distance exactly 1 from the set (those of `tests::ring_runs`), made word by
+    /// word: each row of the set grown by a column both ways, ORed with the rows above and
+    /// below, less the set. Cost: O(runs + rows × words), without the per-row sorts of
+    /// `tests::ring_runs`.
+    fn around(rows: &[(i32, i32, i32)]) -> Self {
+        let (Some(top), Some(bottom)) = (
+            rows.iter().map(|t| t.0).min(),
+            rows.iter().map(|t| t.0).max(),
+        ) else {
+            return Self {
+                left: 0,
+                words: 1,
+                rows: Vec::new(),
+                bits: Vec::new(),
+            };
+        };
+        // Bit j of a frame row is column `left + j`; frame row q is row `top - 1 + q`.
+        let left = rows.iter().map(|t| t.1).min().unwrap_or(0) - 1;
+        let right = rows.iter().map(|t| t.2).max().unwrap_or(0) + 1;
+        let words = ((right - left + 1) as usize).div_ceil(64);
+        let height = (bottom - top + 3) as usize;
+        let mut set = vec![0u64; height * words];
+        for &(r, a, b) in rows {
+            let q = (r - top + 1) as usize;
             set_bits(
-                &mut all_bits[q * words..][..words],
+                &mut set[q * words..][..words],
                 (a - left) as usize,
                 (b - left) as usize,
             );
-            all_rows[q].1 += (b - a + 1) as u32;
         }
-        let mut rows = Vec::new();
-        let mut bits = Vec::new();
-        for (q, &row) in all_rows.iter().enumerate() {
-            if row.1 > 0 {
-                rows.push(row);
-                bits.extend_from_slice(&all_bits[q * words..][..words]);
+        // Each row grown by a column both ways (bits carried across words).
+        let mut grown = vec![0u64; height * words];
+        for (g, s) in grown.chunks_mut(words).zip(set.chunks(words)) {
+            for k in 0..words {
+                let mut v = s[k] | s[k] << 1 | s[k] >> 1;
+                if k > 0 {
+                    v |= s[k - 1] >> 63;
+                }
+                if k + 1 < words {
+                    v |= s[k + 1] << 63;
+                }
+                g[k] = v;
+            }
+        }
+        let mut out_rows = Vec::new();
+        let mut bits = Vec::with_capacity(height * words);
+        for q in 0..height {
+            let start = bits.len();
+            let mut count = 0u32;
+            for k in 0..words {
+                let near = (q.saturating_sub(1)..(q + 2).min(height))
+                    .fold(0u64, |v, p| v | grown[p * words + k]);
+                let v = near & !set[q * words + k];
+                count += v.count_ones();
+                bits.push(v);
+            }
+            if count > 0 {
+                out_rows.push((top - 1 + q as i32, count));
+            } else {
+                bits.truncate(start);
             }
         }
         Self {
             left,
             words,
-            rows,
+            rows: out_rows,
             bits,
         }
     }
-}
-
-/// The texels at Chebyshev distance exactly 1 from the runs `rows` (sorted by row, then
-/// column) of a set `h` rows tall: `(row, first, last)`, rows `-1..=h`.
-fn ring_runs(rows: &[(i32, i32, i32)], h: i32) -> Vec<(i32, i32, i32)> {
-    let mut by_row: Vec<Vec<(i32, i32)>> = vec![Vec::new(); h.max(0) as usize];
-    for &(r, a, b) in rows {
-        by_row[r as usize].push((a, b));
-    }
-    let mut out = Vec::new();
-    for r in -1..=h {
-        let mut iv: Vec<(i32, i32)> = (r - 1..=r + 1)
-            .filter(|&q| q >= 0 && q < h)
-            .flat_map(|q| by_row[q as usize].iter().map(|&(a, b)| (a - 1, b + 1)))
-            .collect();
-        iv.sort_unstable();
-        let mut merged: Vec<(i32, i32)> = Vec::new();
-        for (a, b) in iv {
-            match merged.last_mut() {
-                Some(m) if a <= m.1 + 1 => m.1 = m.1.max(b),
-                _ => merged.push((a, b)),
-            }
-        }
-        let own: &[(i32, i32)] = if (0..h).contains(&r) {
-            &by_row[r as usize]
-        } else {
-            &[]
-        };
-        for (s, e) in merged {
-            let mut c = s;
-            for &(a, b) in own.iter().filter(|&&(a, b)| b >= s && a <= e) {
-                if a > c {
-                    out.push((r, c, a - 1));
-                }
-                c = c.max(b + 1);
-            }
-            if c <= e {
-                out.push((r, c, e));
-            }
-        }
-    }
-    out
 }
 
 #[cfg(test)]

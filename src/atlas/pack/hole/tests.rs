@@ -1,4 +1,4 @@
-use super::{d_rows, ring_runs, spread_out, Occupancy, RingBits, Row, ScanBuffers, CANDIDATE_ROWS};
+use super::{d_rows, set_bits, spread_out, Occupancy, RingBits, Row, ScanBuffers, CANDIDATE_ROWS};
 use crate::atlas::pack::place::{orientations, prepare_chart};
 use crate::atlas::pack::test_charts::{mixed_set, xorshift64};
 
@@ -158,15 +158,16 @@ fn scan_row_finds_the_first_fit_of_a_brute_force() {
     assert!(found > 200 && none > 200, "{found} found, {none} none");
 }
 
-/// Random sets of texels: the ring is exactly the texels outside the set at Chebyshev
-/// distance 1 from it, each once.
+/// Random sets of texels, some wider than a word: the ring (of `ring_runs` and of
+/// `RingBits::around`) is exactly the texels outside the set at Chebyshev distance 1 from it,
+/// each once.
 #[test]
-fn ring_runs_are_the_texels_at_distance_one() {
+fn rings_are_the_texels_at_distance_one() {
     let mut seed = 0x51f1_5eed_0dd5_eed5u64;
     let mut next = |n: i32| (xorshift64(&mut seed) % n as u64) as i32;
     let mut texels = 0;
-    for _ in 0..200 {
-        let (w, h) = (1 + next(20), 1 + next(12));
+    for i in 0..300 {
+        let (w, h) = (1 + next(if i % 3 == 0 { 150 } else { 20 }), 1 + next(12));
         let fill = 1 + next(4);
         let set: Vec<bool> = (0..w * h).map(|_| next(5) < fill).collect();
         let inside = |x: i32, y: i32| {
@@ -203,6 +204,20 @@ fn ring_runs_are_the_texels_at_distance_one() {
             }
         }
         assert_eq!(got, expected, "set {w}x{h} runs {runs:?}");
+        // The ring made word by word holds exactly these texels, each row's count with it.
+        let bits = RingBits::around(&runs);
+        let mut from_bits = BTreeSet::new();
+        for (q, &(r, count)) in bits.rows.iter().enumerate() {
+            let row = &bits.bits[q * bits.words..][..bits.words];
+            let ones: u32 = row.iter().map(|w| w.count_ones()).sum();
+            assert_eq!(ones, count, "row {r} of set {w}x{h}");
+            for j in 0..64 * bits.words {
+                if row[j / 64] >> (j % 64) & 1 == 1 {
+                    from_bits.insert((r, bits.left + j as i32));
+                }
+            }
+        }
+        assert_eq!(from_bits, expected, "bits of set {w}x{h} runs {runs:?}");
         texels += got.len();
     }
     assert!(texels > 2000, "{texels}");
@@ -421,4 +436,85 @@ fn contact_bits_agrees_with_contact() {
         occupied += usize::from(expected > 0);
     }
     assert!(edge > 50 && occupied > 200, "{edge} {occupied}");
+}
+
+impl RingBits {
+    /// The ring of disjoint runs `ring` (as [`ring_runs`] returns them): the reference of
+    /// [`Self::around`].
+    fn new(ring: &[(i32, i32, i32)]) -> Self {
+        let left = ring.iter().map(|t| t.1).min().unwrap_or(0);
+        let right = ring.iter().map(|t| t.2).max().unwrap_or(0);
+        let top = ring.iter().map(|t| t.0).min().unwrap_or(0);
+        let bottom = ring.iter().map(|t| t.0).max().unwrap_or(-1);
+        let words = ((right - left + 1).max(1) as usize).div_ceil(64);
+        let height = (bottom - top + 1).max(0) as usize;
+        let mut all_rows: Vec<(i32, u32)> = (0..height).map(|q| (top + q as i32, 0)).collect();
+        let mut all_bits = vec![0u64; height * words];
+        for &(r, a, b) in ring {
+            let q = (r - top) as usize;
+            set_bits(
+                &mut all_bits[q * words..][..words],
+                (a - left) as usize,
+                (b - left) as usize,
+            );
+            all_rows[q].1 += (b - a + 1) as u32;
+        }
+        let mut rows = Vec::new();
+        let mut bits = Vec::new();
+        for (q, &row) in all_rows.iter().enumerate() {
+            if row.1 > 0 {
+                rows.push(row);
+                bits.extend_from_slice(&all_bits[q * words..][..words]);
+            }
+        }
+        Self {
+            left,
+            words,
+            rows,
+            bits,
+        }
+    }
+}
+
+/// The texels at Chebyshev distance exactly 1 from the runs `rows` (sorted by row, then
+/// column) of a set `h` rows tall: `(row, first, last)`, rows `-1..=h` (the reference of
+/// [`RingBits::around`]).
+fn ring_runs(rows: &[(i32, i32, i32)], h: i32) -> Vec<(i32, i32, i32)> {
+    let mut by_row: Vec<Vec<(i32, i32)>> = vec![Vec::new(); h.max(0) as usize];
+    for &(r, a, b) in rows {
+        by_row[r as usize].push((a, b));
+    }
+    let mut out = Vec::new();
+    for r in -1..=h {
+        let mut iv: Vec<(i32, i32)> = (r - 1..=r + 1)
+            .filter(|&q| q >= 0 && q < h)
+            .flat_map(|q| by_row[q as usize].iter().map(|&(a, b)| (a - 1, b + 1)))
+            .collect();
+        iv.sort_unstable();
+        let mut merged: Vec<(i32, i32)> = Vec::new();
+        for (a, b) in iv {
+            match merged.last_mut() {
+                Some(m) if a <= m.1 + 1 => m.1 = m.1.max(b),
+                _ => merged.push((a, b)),
+            }
+        }
+        let own: &[(i32, i32)] = if (0..h).contains(&r) {
+            &by_row[r as usize]
+        } else {
+            &[]
+        };
+        for (s, e) in merged {
+            let mut c = s;
+            for &(a, b) in own.iter().filter(|&&(a, b)| b >= s && a <= e) {
+                if a > c {
+                    out.push((r, c, a - 1));
+                }
+                c = c.max(b + 1);
+            }
+            if c <= e {
+                out.push((r, c, e));
+            }
+        }
+    }
+    out
 }
