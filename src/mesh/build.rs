@@ -12,9 +12,10 @@
 //!    each run of equal hashes is confirmed (or, on a collision, split) by the full key, and each
 //!    group of equal keys becomes one welded vertex, named by its lowest source index.
 //! 3. Degenerate faces: repeated welded vertex, or zero area (`geometry::triangle_is_zero_area`).
-//!    The ends of a near-zero-length edge of a zero-area face that no face of area has both of
-//!    are joined (union-find, each group named by its lowest source index;
-//!    [`NEAR_WELD_RELATIVE`]), and the faces classified again.
+//!    The ends of a near-zero-length edge of a zero-area face (relative to that face and to
+//!    the faces of area at either end) are joined (union-find in ascending pair order, each
+//!    group named by its lowest source index; [`NEAR_WELD_RELATIVE`]), except where a join
+//!    would put two corners of a face of area into one group, and the faces classified again.
 //!    Faces with a repeated vertex are isolated (their corners become vertices of their own).
 //! 4. Group half-edges by undirected welded edge (bucket by lower end, sort each bucket) and glue:
 //!    exactly one half-edge each way → glued; otherwise repair (pair greedily or cut) and report.
@@ -58,25 +59,28 @@ pub struct BuiltMesh {
     pub num_welded_vertices: usize,
 }
 
-/// An edge of a zero-area face at most this fraction of the face's longest edge joins its two
-/// ends, unless a face of area has both (the module doc of [`crate::mesh`], "Weld rule").
+/// An edge of a zero-area face at most this fraction of the face's longest edge, and of the
+/// shortest edge of each face of area at either end, joins its two ends, unless that collapses a
+/// face of area (the module doc of [`crate::mesh`], "Weld rule").
 pub const NEAR_WELD_RELATIVE: f64 = 1e-9;
 
 /// The corner `k` whose edge to corner `k + 1` is the shortest of the triangle `p` when that
 /// edge is at most [`NEAR_WELD_RELATIVE`] of the longest (ties: the lowest `k`); `None`
 /// otherwise, or when the triangle has no length at all (every corner equal).
 fn near_coincident_edge(p: &[[f64; 3]; 3]) -> Option<usize> {
-    let len2 = |a: [f64; 3], b: [f64; 3]| {
-        let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-        d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
-    };
-    let l = [len2(p[0], p[1]), len2(p[1], p[2]), len2(p[2], p[0])];
+    let l = [dist2(p[0], p[1]), dist2(p[1], p[2]), dist2(p[2], p[0])];
     let longest = l[0].max(l[1]).max(l[2]);
     if !(longest > 0.0 && longest.is_finite()) {
         return None;
     }
     let k = (0..3).min_by(|&a, &b| l[a].total_cmp(&l[b]))?;
     (l[k] <= NEAR_WELD_RELATIVE * NEAR_WELD_RELATIVE * longest).then_some(k)
+}
+
+/// Squared distance between two points.
+fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
 }
 
 /// `-0.0` and `0.0` weld together: compare bits of the coordinate with the sign of zero cleared.
@@ -183,74 +187,54 @@ impl TriangleMesh {
                 .collect()
         };
         let mut face_degeneracy = degeneracy(&wv);
-        // 3b. Near-coincident ends of a zero-area face (the module doc of `crate::mesh`).
+        // 3b. Near-coincident ends of a zero-area face (the module doc of `crate::mesh`), also
+        // near-coincident beside the faces of area at either end: their shortest edge is the
+        // local scale (a needle to a far vertex makes a real edge short relative to itself).
+        let mut local_edge2 = vec![f64::INFINITY; ns];
+        for (f, kind) in face_degeneracy.iter().enumerate() {
+            if kind.is_none() {
+                let p = tris[f].map(|i| pos[i as usize]);
+                let shortest = (0..3)
+                    .map(|k| dist2(p[k], p[(k + 1) % 3]))
+                    .fold(f64::INFINITY, f64::min);
+                for k in 0..3 {
+                    let w = wv[3 * f + k] as usize;
+                    local_edge2[w] = local_edge2[w].min(shortest);
+                }
+            }
+        }
         let candidates: Vec<(u32, u32)> = face_degeneracy
             .par_iter()
             .enumerate()
             .filter(|(_, k)| **k == Some(DegenerateKind::ZeroArea))
             .filter_map(|(f, _)| {
-                let k = near_coincident_edge(&tris[f].map(|i| pos[i as usize]))?;
+                let p = tris[f].map(|i| pos[i as usize]);
+                let k = near_coincident_edge(&p)?;
                 let (a, b) = (tris[f][k], tris[f][(k + 1) % 3]);
-                (input.weld_group[a as usize] == input.weld_group[b as usize])
-                    .then_some((wv[3 * f + k], wv[3 * f + (k + 1) % 3]))
+                let (wa, wb) = (wv[3 * f + k], wv[3 * f + (k + 1) % 3]);
+                let local = local_edge2[wa as usize].min(local_edge2[wb as usize]);
+                let near =
+                    dist2(p[k], p[(k + 1) % 3]) <= NEAR_WELD_RELATIVE * NEAR_WELD_RELATIVE * local;
+                (near && input.weld_group[a as usize] == input.weld_group[b as usize])
+                    .then_some((wa, wb))
             })
             .collect();
-        // ... unless a face of area has both ends: the join would make it a repeated-vertex
-        // face, collapsed, where the file gives it area. (A needle face to one stray far vertex
-        // is zero-area relative to its own length, and its short edge may be a real edge of the
-        // surface.)
-        let joins: Vec<(u32, u32)> = if candidates.is_empty() {
-            Vec::new()
-        } else {
-            let mut pairs: Vec<(u32, u32)> = candidates
-                .iter()
-                .map(|&(a, b)| (a.min(b), a.max(b)))
-                .collect();
-            pairs.sort_unstable();
-            pairs.dedup();
-            let mut blocked = vec![false; pairs.len()];
-            for (f, kind) in face_degeneracy.iter().enumerate() {
-                if kind.is_none() {
-                    for k in 0..3 {
-                        let (a, b) = (wv[3 * f + k], wv[3 * f + (k + 1) % 3]);
-                        if let Ok(i) = pairs.binary_search(&(a.min(b), a.max(b))) {
-                            blocked[i] = true;
-                        }
-                    }
-                }
-            }
-            candidates
-                .into_iter()
-                .filter(|&(a, b)| {
-                    pairs
-                        .binary_search(&(a.min(b), a.max(b)))
-                        .is_ok_and(|i| !blocked[i])
-                })
-                .collect()
-        };
+        // ... unless a face of area would get two corners in one joined group: the join would
+        // make it a repeated-vertex face, collapsed, where the file gives it area. (A needle
+        // face to one stray far vertex is zero-area relative to its own length, and its short
+        // edge may be a real edge of the surface; two such joins, each harmless alone, can
+        // chain two corners of a face of area into one group.)
+        let joins = allowed_joins(&candidates, &wv, &face_degeneracy);
         let joined = !joins.is_empty();
         if joined {
-            // Union-find over welded vertices, each group named by its lowest source index (as
-            // the weld names them), so the result does not depend on the order of the joins.
-            let mut parent: Vec<u32> = (0..ns as u32).collect();
-            let find = |parent: &mut Vec<u32>, mut x: u32| {
-                while parent[x as usize] != x {
-                    let up = parent[parent[x as usize] as usize];
-                    parent[x as usize] = up;
-                    x = up;
-                }
-                x
-            };
-            for (a, b) in joins {
-                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-                if ra != rb {
-                    parent[ra.max(rb) as usize] = ra.min(rb);
-                    num_welded_vertices -= 1;
-                }
-            }
             for w in wv.iter_mut() {
-                *w = find(&mut parent, *w);
+                *w = joins[*w as usize];
             }
+            num_welded_vertices -= joins
+                .iter()
+                .enumerate()
+                .filter(|&(i, &r)| i as u32 != r)
+                .count();
             face_degeneracy = degeneracy(&wv);
         }
         let mut defects: Vec<MeshDefect> = face_degeneracy
@@ -503,6 +487,103 @@ fn prev(h: usize) -> usize {
 
 /// The weld key of a source vertex: its group and its coordinate bits (`-0.0` as `0.0`).
 type WeldKey = (u32, [u64; 3]);
+
+/// The joins of step 3b: every candidate pair `(a, b)` of welded vertices (ends of a
+/// near-coincident edge of a zero-area face) is joined unless that would put two corners of a
+/// face of area (`degeneracy` `None`, corners `wv`) into one group, whether the pair itself is an
+/// edge of that face or the groups already joined chain them. The pairs are taken in ascending
+/// order (deterministic); each group is named by its lowest welded id (the lowest source index,
+/// as the weld names them). Returns, for each welded id, the id of its group, or an empty vector
+/// when nothing is joined. Cost: O((candidates + faces) log) — only the faces of area with two
+/// corners among the candidates' vertices are tracked, each group's list merged into the larger.
+fn allowed_joins(
+    candidates: &[(u32, u32)],
+    wv: &[u32],
+    degeneracy: &[Option<DegenerateKind>],
+) -> Vec<u32> {
+    if candidates.is_empty() {
+        return Vec::new();
+    }
+    let mut pairs: Vec<(u32, u32)> = candidates
+        .iter()
+        .filter(|(a, b)| a != b)
+        .map(|&(a, b)| (a.min(b), a.max(b)))
+        .collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    let mut ends: Vec<u32> = pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
+    ends.sort_unstable();
+    ends.dedup();
+    let slot = |v: u32| ends.binary_search(&v).ok();
+    // Per candidate vertex (by slot): the faces of area with two or more corners among the
+    // candidates' vertices (only those can collapse), as their corner slots.
+    let mut watched: Vec<[Option<usize>; 3]> = Vec::new();
+    let mut faces_of: Vec<Vec<u32>> = vec![Vec::new(); ends.len()];
+    for (f, kind) in degeneracy.iter().enumerate() {
+        if kind.is_some() {
+            continue;
+        }
+        let c = [0, 1, 2].map(|k| slot(wv[3 * f + k]));
+        if c.iter().flatten().count() >= 2 {
+            let id = watched.len() as u32;
+            for &s in c.iter().flatten() {
+                faces_of[s].push(id);
+            }
+            watched.push(c);
+        }
+    }
+    // Union-find over slots; a group's root is its lowest slot (its lowest welded id).
+    let mut parent: Vec<usize> = (0..ends.len()).collect();
+    fn find(parent: &mut [usize], mut x: usize) -> usize {
+        while parent[x] != x {
+            parent[x] = parent[parent[x]];
+            x = parent[x];
+        }
+        x
+    }
+    let mut any = false;
+    for (a, b) in pairs {
+        let (Some(sa), Some(sb)) = (slot(a), slot(b)) else {
+            continue;
+        };
+        let (ra, rb) = (find(&mut parent, sa), find(&mut parent, sb));
+        if ra == rb {
+            continue;
+        }
+        // A face of area with a corner in each group is in both lists: scan the shorter.
+        let (small, large) = if faces_of[ra].len() <= faces_of[rb].len() {
+            (ra, rb)
+        } else {
+            (rb, ra)
+        };
+        let collapses = faces_of[small].iter().any(|&id| {
+            let c = watched[id as usize];
+            let roots: Vec<usize> = c.iter().flatten().map(|&s| find(&mut parent, s)).collect();
+            roots.contains(&small) && roots.contains(&large)
+        });
+        if collapses {
+            continue;
+        }
+        let moved = std::mem::take(&mut faces_of[small]);
+        faces_of[large].extend(moved);
+        let (lo, hi) = (ra.min(rb), ra.max(rb));
+        parent[hi] = lo;
+        if lo != large {
+            faces_of.swap(lo, large);
+        }
+        any = true;
+    }
+    if !any {
+        return Vec::new();
+    }
+    let n = wv.iter().map(|&w| w as usize + 1).max().unwrap_or(0);
+    let mut group: Vec<u32> = (0..n as u32).collect();
+    for s in 0..ends.len() {
+        let r = find(&mut parent, s);
+        group[ends[s] as usize] = ends[r];
+    }
+    group
+}
 
 /// A 64-bit mix of a weld key (splitmix64 finaliser per word). Only a sort key: equal hashes are
 /// always confirmed on the full key, so collisions cost time, never correctness.

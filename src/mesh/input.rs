@@ -13,8 +13,9 @@ pub struct MeshInput {
     pub triangles: Vec<[u32; 3]>,
     /// Welding scope per source vertex: two vertices are welded only if their groups are equal
     /// AND their positions are bit-identical (after `-0.0 == 0.0`), or they end an edge of a
-    /// zero-area face at most `NEAR_WELD_RELATIVE` of its longest that no face of area has both
-    /// of (the weld rule of [`crate::mesh`]). `gltf_io` uses the glTF
+    /// zero-area face at most `NEAR_WELD_RELATIVE` of its longest and of the faces of area
+    /// around them, and joining them collapses no face of area (the weld rule of
+    /// [`crate::mesh`]). `gltf_io` uses the glTF
     /// mesh index, because different meshes live in different local spaces.
     pub weld_group: Vec<u32>,
 }

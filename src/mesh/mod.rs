@@ -14,9 +14,11 @@
 //! as an asset may model a crack or a gap that thin on purpose. One exception: the two ends of
 //! an edge of a zero-area face (three distinct, collinear vertices) that is at most
 //! [`NEAR_WELD_RELATIVE`] (1e-9) of the face's longest edge are one vertex too (same
-//! `weld_group`), joined transitively, unless a face of area has both ends (the join would
-//! collapse it where the file gives it area: a real edge of the surface whose zero-area face
-//! is a needle to one stray vertex far away, or a thin face between the two). The zero-area
+//! `weld_group`) when that edge is also at most [`NEAR_WELD_RELATIVE`] of the shortest edge
+//! of every face of area at either end (the local scale: a needle to one stray vertex far
+//! away makes a real edge of the surface short relative to the needle), joined transitively,
+//! unless the join would put two corners of a face of area into one vertex (it would collapse
+//! the face where the file gives it area, also through a chain of joins). The zero-area
 //! face the rule is for is a slit between coincident copies of a vertex whose coordinates differ by rounding (the poles of
 //! a UV sphere computed as `sin(π) ≈ 1.2e-16`); without the join the faces around the copies
 //! meet only through the slits, their chart flattens each copy apart, and the written atlas

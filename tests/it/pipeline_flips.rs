@@ -128,7 +128,7 @@ fn recount(mesh: &TriangleMesh, uvs: &[[[f32; 2]; 3]], face_page: &[u32]) -> (us
     let bits = |x: f64| if x == 0.0 { 0u64 } else { x.to_bits() };
     let key = |f: usize, k: usize| {
         let v: VertexId = mesh.face_vertices(FaceId(f as u32))[k];
-        let p = mesh.position(v);
+        let p = mesh.corner_position(FaceId(f as u32).corner(k));
         (
             mesh.vertex_weld_group(v),
             p.map(bits),
@@ -179,7 +179,11 @@ fn recount(mesh: &TriangleMesh, uvs: &[[[f32; 2]; 3]], face_page: &[u32]) -> (us
         // The evaluator's `~(x > tol)`: NaN is degenerate.
         let gt = |x: f64, tol: f64| x.partial_cmp(&tol) == Some(std::cmp::Ordering::Greater);
         deg2[f] = !gt(a2[f].abs(), 1e-12 * l2 * l2);
-        let p = mesh.face_positions(FaceId(f as u32));
+        // The file's positions of the corners (`corner_position`), as the evaluator reads
+        // them: a join of the weld moves no position, so a face it collapsed has its area here.
+        let p = mesh
+            .face_corners(FaceId(f as u32))
+            .map(|c| mesh.corner_position(c));
         let e = |i: usize, j: usize| [0, 1, 2].map(|c| p[j][c] - p[i][c]);
         let (e1, e2, e3) = (e(0, 1), e(0, 2), e(1, 2));
         let n = [
@@ -454,4 +458,33 @@ proptest! {
         };
         assert_clean(&mesh, &atlas);
     }
+}
+
+/// Two joins of the weld that are each allowed alone (no face of area has both ends of either)
+/// but chain a grid corner to the origin through a split vertex beside it: a needle to a far
+/// vertex makes a real edge "near-coincident", and a split at 1e-7 of an edge gives the other.
+/// Joined transitively, the two corners of three faces of area became one vertex: collapsed in
+/// UV where the file gives them area (the evaluator's `degenerate_uv_with_3d_area` was 3, our
+/// report 0, since it measured at the joined positions). The weld now refuses a join that
+/// would put two corners of a face of area into one group. Found by the property above once it
+/// counted 3-D area at the file's positions.
+#[test]
+fn joins_that_would_chain_two_corners_of_a_face_of_area_are_refused() {
+    let (mesh, atlas) = generated(
+        (0, 1),
+        &[
+            (3, 0, 0.0, 0.0),
+            (0, 0, 0.0, 0.0),
+            (3, 0, 0.0, 0.0),
+            (0, 0, 0.0, 0.0),
+            (3, 0, 0.0, 0.0),
+            (3, 0, 0.0, 0.0),
+            (3, 0, 0.0, 0.0),
+            (9, 450_473_882, 0.0, 0.998_502_032_617_889_1),
+            (0, 40_622_106, 0.0, 0.0),
+            (0, 1_219_662_381, 0.0, 0.0),
+        ],
+    );
+    assert_eq!(atlas.report.degenerate_uv_with_3d_area, 0);
+    assert_clean(&mesh, &atlas);
 }
