@@ -488,3 +488,30 @@ fn joins_that_would_chain_two_corners_of_a_face_of_area_are_refused() {
     assert_eq!(atlas.report.degenerate_uv_with_3d_area, 0);
     assert_clean(&mesh, &atlas);
 }
+
+/// A needle to a far vertex makes the real edge (1, 0)–(2, 0) of a grid "near-coincident"
+/// (1e-9 of the needle's length), and no face of area has both its ends, so the weld joined
+/// them: a thin face of area at (2, 0) was then measured at (1, 0), zero-area at the joined
+/// positions where the file gives it area 5e-6 (relative), and came out collapsed in UV (the
+/// evaluator's `degenerate_uv_with_3d_area` 1, our report 0). A join now also needs its edge to
+/// be at most 1e-9 of the shortest edge of every face of area at either end. Found by the
+/// property above once it counted 3-D area at the file's positions.
+#[test]
+fn a_real_edge_beside_a_needle_is_not_joined() {
+    let (mesh, atlas) = generated(
+        (0, 1),
+        &[
+            (9, 2_750_194_590, 0.0, 0.0),
+            (
+                0,
+                2_826_848_257,
+                0.692_772_200_942_599_4,
+                0.512_166_907_427_940_4,
+            ),
+            (3, 0, 0.0, 0.0),
+            (0, 2_916_840_406, 0.0, 0.0),
+        ],
+    );
+    assert_eq!(atlas.report.degenerate_uv_with_3d_area, 0);
+    assert_clean(&mesh, &atlas);
+}
