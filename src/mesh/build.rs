@@ -494,8 +494,10 @@ type WeldKey = (u32, [u64; 3]);
 /// edge of that face or the groups already joined chain them. The pairs are taken in ascending
 /// order (deterministic); each group is named by its lowest welded id (the lowest source index,
 /// as the weld names them). Returns, for each welded id, the id of its group, or an empty vector
-/// when nothing is joined. Cost: O((candidates + faces) log) — only the faces of area with two
-/// corners among the candidates' vertices are tracked, each group's list merged into the larger.
+/// when nothing is joined. Cost: only the faces of area with two corners among the candidates'
+/// vertices are tracked; a union scans the shorter of its groups' lists and merges it into the
+/// longer (each face moves O(log) times), and a pair of groups found to collapse a face is
+/// remembered, so its list is scanned again only after one of the groups has grown.
 fn allowed_joins(
     candidates: &[(u32, u32)],
     wv: &[u32],
@@ -542,12 +544,15 @@ fn allowed_joins(
         x
     }
     let mut any = false;
+    // Pairs of groups (by root) found to collapse a face: groups only grow, so such a face keeps
+    // a corner in each, and the pair stays refused without another scan.
+    let mut refused: std::collections::BTreeSet<(usize, usize)> = Default::default();
     for (a, b) in pairs {
         let (Some(sa), Some(sb)) = (slot(a), slot(b)) else {
             continue;
         };
         let (ra, rb) = (find(&mut parent, sa), find(&mut parent, sb));
-        if ra == rb {
+        if ra == rb || refused.contains(&(ra.min(rb), ra.max(rb))) {
             continue;
         }
         // A face of area with a corner in each group is in both lists: scan the shorter.
@@ -557,11 +562,11 @@ fn allowed_joins(
             (rb, ra)
         };
         let collapses = faces_of[small].iter().any(|&id| {
-            let c = watched[id as usize];
-            let roots: Vec<usize> = c.iter().flatten().map(|&s| find(&mut parent, s)).collect();
-            roots.contains(&small) && roots.contains(&large)
+            let roots = watched[id as usize].map(|c| c.map(|s| find(&mut parent, s)));
+            roots.contains(&Some(small)) && roots.contains(&Some(large))
         });
         if collapses {
+            refused.insert((ra.min(rb), ra.max(rb)));
             continue;
         }
         let moved = std::mem::take(&mut faces_of[small]);
