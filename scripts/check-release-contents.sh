@@ -7,7 +7,7 @@
 # that is how the check is shown to catch test support in a build).
 #
 # Builds what `cargo build --release` builds (the library and the `texatlas` binary, without
-# dev-dependencies) and fails when
+# dev-dependencies; LTO off, see below) and fails when
 # 1. the `test-support` feature of texatlas is on in the normal dependency graph;
 # 2. the release library (rlib) or binary defines a symbol of the test support modules
 #    (`mesh::fixtures`, `atlas::parameterize::test_meshes`, `atlas::pack::test_charts`) or of a
@@ -40,7 +40,11 @@ elif grep -q 'texatlas feature "test-support"' <<<"$features"; then
 fi
 
 # The artifact paths of this very build (not whatever a later `cargo bench` left in target/).
-artifacts=$(cargo build --release --message-format=json --quiet "$@" |
+# Built without the release profile's LTO (and with the default codegen units): with LTO the
+# rlib holds only bitcode, where nm finds no symbol at all, and the binary may inline
+# `atlas::generate`. LTO changes how the code is generated, not which modules are compiled in.
+artifacts=$(CARGO_PROFILE_RELEASE_LTO=false CARGO_PROFILE_RELEASE_CODEGEN_UNITS=16 \
+  cargo build --release --message-format=json --quiet "$@" |
   python3 -c '
 import json, sys
 for line in sys.stdin:
