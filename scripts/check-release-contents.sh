@@ -43,8 +43,11 @@ fi
 # Built without the release profile's LTO (and with the default codegen units): with LTO the
 # rlib holds only bitcode, where nm finds no symbol at all, and the binary may inline
 # `atlas::generate`. LTO changes how the code is generated, not which modules are compiled in.
+# In a target directory of its own, so that it neither replaces nor rebuilds the LTO build of
+# target/release.
 artifacts=$(CARGO_PROFILE_RELEASE_LTO=false CARGO_PROFILE_RELEASE_CODEGEN_UNITS=16 \
-  cargo build --release --message-format=json --quiet "$@" |
+  cargo build --release --target-dir "$repo/target/release-contents" --message-format=json \
+  --quiet "$@" |
   python3 -c '
 import json, sys
 for line in sys.stdin:
