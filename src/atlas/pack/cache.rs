@@ -192,6 +192,7 @@ impl Context<'_, '_> {
                 o.rotations,
                 self.holes,
                 self.scored,
+                page,
             ),
             padding_texels: o.padding_texels,
             page_texels: page,

@@ -62,6 +62,7 @@ pub mod horizon;
 mod one_page;
 pub mod place;
 pub mod raster;
+mod rotations;
 #[cfg(any(test, feature = "test-support"))]
 pub mod test_charts;
 
@@ -85,6 +86,10 @@ pub use cache::PackCache;
 use fit::{fit_to_page, fit_to_page_after, fit_to_page_unless_first_misses, FirstTry, FitStart};
 pub use fit::{FIT_GUESS_GROWTH, FIT_START_FILL};
 pub use one_page::pack_one_page;
+pub use rotations::{
+    chart_rotations, hole_rotations, DIAGONAL_MIN_ASPECT, DIAGONAL_MIN_PAGE_FRACTION,
+    SMALL_CHART_TEXELS,
+};
 pub use types::{
     FirstPacker, PackChart, PackError, PackOptions, Packing, PlacedChart, TexelDensity,
 };
@@ -125,52 +130,6 @@ pub const HOLE_FIT_TOLERANCE: f64 = 1e-2;
 /// 3 probes, 0.645 with 8); stopping at the first failure keeps the cost at one packing where
 /// probes do not fit.
 pub const FIT_PROBES: usize = 8;
-
-/// Charts whose placed UV area is below this many texels² try only the quarter turns of the
-/// diameter-vertical orientation (when `rotations` is a multiple of 4): a subset of the
-/// angles, a quarter of the search. Not when the charts are packed again with hole filling
-/// ([`hole`]): there a small chart goes into a gap between placed charts, where the angle
-/// matters. Trade-off: such charts are a few texels across, where finer angles change the
-/// packing little, and they can number thousands, so the search is several times faster.
-pub const SMALL_CHART_TEXELS: f64 = 1024.0;
-
-/// The rotations tried by the packing with hole filling ([`hole`]) for `rotations` asked:
-/// half as many again (16 → 24) when `rotations` is a multiple of 8 (so that the quarter
-/// turns still share footprints) and that stays within [`MAX_ROTATIONS`]; otherwise
-/// `rotations`. Trade-off: hole filling places each chart in a gap of the page, where more
-/// angles find more fits, at a search cost proportional to the angles.
-pub fn hole_rotations(rotations: u32) -> u32 {
-    let more = rotations + rotations / 2;
-    if rotations % 8 == 0 && more <= MAX_ROTATIONS {
-        more
-    } else {
-        rotations
-    }
-}
-
-/// The rotations a chart tries in one packing, for `rotations` asked: the quarter turns of
-/// its axis-aligned base orientation for a [`place::PreparedChart::rectangular`] chart (when
-/// `rotations` is a multiple of 4, and not in a `scored` hole-filling packing, where a
-/// rectangle turned to fit a gap between many charts pays); the quarter turns of the diameter-vertical orientation
-/// for a chart below [`SMALL_CHART_TEXELS`] at `texels_per_unit` (same condition, and not when
-/// filling `holes`); [`hole_rotations`] in a `scored` hole-filling packing; else `rotations`.
-pub fn chart_rotations(
-    prep: &place::PreparedChart,
-    texels_per_unit: f64,
-    rotations: u32,
-    holes: bool,
-    scored: bool,
-) -> u32 {
-    let texels = prep.area_m2 * texels_per_unit * texels_per_unit;
-    let small = texels < SMALL_CHART_TEXELS && !holes;
-    if rotations % 4 == 0 && ((prep.rectangular && !scored) || small) {
-        rotations.min(4)
-    } else if scored {
-        hole_rotations(rotations)
-    } else {
-        rotations
-    }
-}
 
 /// Packings with hole filling of at least this many charts use the contact-scored search and
 /// [`hole_rotations`] ([`hole`]); fewer charts take the plain first fit with `rotations`.

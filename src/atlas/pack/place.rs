@@ -82,6 +82,10 @@ pub struct PreparedChart {
     /// rectangle: then only the quarter turns of its axis-aligned base orientation are tried
     /// (the packer's callers, [`super::chart_rotations`]).
     pub rectangular: bool,
+    /// The longer and the shorter side of the minimum-area enclosing rectangle of a
+    /// [`Self::rectangular`] chart, texels at density 1 (`[0.0, 0.0]` for the other charts):
+    /// whether it is long for the page ([`super::chart_rotations`]).
+    pub box_texels: [f64; 2],
     /// The 3-D area (sort key and area accounting), model units².
     pub area_m2: f64,
     /// False for a chart without vertices (nothing to place).
@@ -316,6 +320,7 @@ pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChar
     let mut unit_scale = 0.0;
     let mut base_angle_rad = 0.0;
     let mut rectangular = false;
+    let mut box_texels = [0.0; 2];
     let mut diameter_angle_rad = 0.0;
     if extent > 0.0 && extent.is_finite() {
         let norm = |p: [f64; 2]| [(p[0] - centre[0]) / extent, (p[1] - centre[1]) / extent];
@@ -341,6 +346,12 @@ pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChar
                     let box_area = mbox.along * mbox.across;
                     if box_area > 0.0 && uv_area_normalized >= RECTANGULAR_FILL * box_area {
                         rectangular = true;
+                        // Normalized units to texels at density 1: `extent · unit_scale`.
+                        let texels = |side: f64| side * extent * s;
+                        box_texels = [
+                            texels(mbox.along.max(mbox.across)),
+                            texels(mbox.along.min(mbox.across)),
+                        ];
                         // The edge direction horizontal, then a quarter turn when the box is
                         // longer along it (longer side vertical, as the diameter otherwise).
                         let theta = mbox.dir[1].atan2(mbox.dir[0]);
@@ -361,6 +372,7 @@ pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChar
         base_angle_rad,
         diameter_angle_rad,
         rectangular,
+        box_texels,
         area_m2: if unit_scale > 0.0 { chart.area_m2 } else { 0.0 },
         has_vertices: !chart.uv.is_empty(),
         outline: outline_triangles(chart.uv, chart.triangles),

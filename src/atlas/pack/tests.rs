@@ -1220,3 +1220,36 @@ fn a_search_above_a_density_that_fits_packs_denser_or_gives_up() {
         );
     }
 }
+
+/// Strips that no cut can shorten (one quad each, 20 times longer than wide) set the density by
+/// their length: laid along the page's diagonal they pack denser than along a side, which is
+/// all that 4 rotations allow (only 90° turns), and their guarantees hold.
+#[test]
+fn long_strips_pack_along_the_diagonal() {
+    let charts: Vec<OwnedChart> = (0..3).map(|_| strip(20.0, 1.0, 1, 0.0)).collect();
+    let efficiency = |rotations: u32| {
+        let options = PackOptions {
+            rotations,
+            ..PackOptions::default()
+        };
+        let (packing, check) = pack(&charts, &options);
+        assert_guarantees(&check, &format!("{rotations} rotations"));
+        let d = packing.texels_per_unit;
+        (60.0 * d * d / (1024.0 * 1024.0), packing)
+    };
+    let (along_sides, _) = efficiency(4);
+    let (diagonal, packing) = efficiency(16);
+    // Along a side: at most the page's side per 20 m, 3 · 20 m² at 1024/20 texels per metre.
+    assert!(along_sides <= 0.15 + 1e-9, "{along_sides}");
+    assert!(
+        diagonal >= 1.4 * along_sides,
+        "{diagonal} against {along_sides}"
+    );
+    // Some strip is turned an eighth: its long edge runs at 45° on the page.
+    let turned = packing.charts.iter().any(|c| {
+        let (a, b) = (c.uv[0], c.uv[2]);
+        let (dx, dy) = ((b[0] - a[0]).abs(), (b[1] - a[1]).abs());
+        dx > 0.1 && (dx - dy).abs() < 1e-3 * dx
+    });
+    assert!(turned, "{:?}", packing.charts);
+}
