@@ -292,6 +292,30 @@ fn long_tubes_are_cut_across_their_length() {
     assert_long_charts_cut(&atlas, 0.56);
 }
 
+/// Strips that no cut can shorten: three open tubes of one ring (each quad spans its tube's
+/// whole length, 10 to 16 m, radius 0.3 m, 8 sides). Their rectangular charts are laid along the
+/// page's diagonal, where they can be up to √2 times longer than along a side: 0.444, where
+/// the quarter turns alone packed them at 0.277 (`PACKING_ALONG_A_SIDE`, rounded up). One
+/// density, no flip, no overlap.
+#[test]
+fn strips_of_one_quad_pack_along_the_diagonal() {
+    const PACKING_ALONG_A_SIDE: f64 = 0.28;
+    let tubes = fixtures::concat(&[
+        fixtures::cylinder_open(8, 1, 0.3, 16.0),
+        fixtures::cylinder_open(8, 1, 0.3, 13.0),
+        fixtures::cylinder_open(8, 1, 0.3, 10.0),
+    ]);
+    let mesh = TriangleMesh::build(&tubes).expect("builds").mesh;
+    let atlas = generate(&mesh, &AtlasOptions::default(), &mut NoProgress).expect("atlas");
+    assert!(
+        atlas.report.packing_efficiency > 1.4 * PACKING_ALONG_A_SIDE,
+        "{}",
+        atlas.report.packing_efficiency
+    );
+    assert_eq!(atlas.report.flipped, 0);
+    assert_eq!(atlas.report.overlap.exact.pairs, 0);
+}
+
 /// The long cuts' outcome: at least 2 charts cut off, packing above `min_packing`, no flip and
 /// no overlap in the report.
 fn assert_long_charts_cut(atlas: &texatlas::atlas::Atlas, min_packing: f64) {
