@@ -53,7 +53,8 @@ pub const CENTRE_GROW_TEXELS: f64 = 0.01;
 
 /// A chart whose UV area is at least this fraction of its minimum-area enclosing rectangle is
 /// *rectangular* ([`PreparedChart::rectangular`]): it is turned axis-aligned and tries only the
-/// quarter turns. Trade-off: for such charts the other angles only grow the padded box (a
+/// quarter turns (the eighth turns when it is a strip long for the page,
+/// [`super::DIAGONAL_MIN_ASPECT`]). Trade-off: for such charts the other angles only grow the padded box (a
 /// rectangle's least box is its own), while each costs a footprint and a search; charts that
 /// fill their box less (L shapes, discs) keep every angle, since a turned bay can take a
 /// neighbour.
@@ -79,8 +80,9 @@ pub struct PreparedChart {
     /// search ([`orientations`] with `padded_bits`).
     pub diameter_angle_rad: f64,
     /// Whether the chart fills at least [`RECTANGULAR_FILL`] of its minimum-area enclosing
-    /// rectangle: then only the quarter turns of its axis-aligned base orientation are tried
-    /// (the packer's callers, [`super::chart_rotations`]).
+    /// rectangle: then only the quarter turns of its axis-aligned base orientation are tried,
+    /// or its eighth turns when it is long for the page (the packer's callers,
+    /// [`super::chart_rotations`]).
     pub rectangular: bool,
     /// The longer and the shorter side of the minimum-area enclosing rectangle of a
     /// [`Self::rectangular`] chart, texels at density 1 (`[0.0, 0.0]` for the other charts):

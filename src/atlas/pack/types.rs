@@ -48,7 +48,8 @@ pub struct PackOptions {
     pub density: TexelDensity,
     /// Rotations tried per chart, evenly spaced over a full turn after orienting the chart's
     /// maximum diameter vertically (a nearly rectangular chart: its minimum-area rectangle
-    /// axis-aligned, and at most the 4 quarter turns, see
+    /// axis-aligned, and at most the 4 quarter turns, or the 8 eighth turns for a strip long
+    /// for the page, see
     /// [`chart_rotations`](super::chart_rotations)); `1` means the base orientation only. `>= 1`.
     /// Default 16 (isocharts-2004 §6). Charts smaller than
     /// [`SMALL_CHART_TEXELS`](super::SMALL_CHART_TEXELS) try at most the 4 quarter turns when
