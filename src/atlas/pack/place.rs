@@ -84,10 +84,10 @@ pub struct PreparedChart {
     /// or its eighth turns when it is long for the page (the packer's callers,
     /// [`super::chart_rotations`]).
     pub rectangular: bool,
-    /// The longer and the shorter side of the minimum-area enclosing rectangle of a
-    /// [`Self::rectangular`] chart, texels at density 1 (`[0.0, 0.0]` for the other charts):
-    /// whether it is long for the page ([`super::chart_rotations`]).
-    pub box_texels: [f64; 2],
+    /// [`box_sides_m`] of a [`Self::rectangular`] chart (`[0.0, 0.0]` for the other charts),
+    /// from the rectangle found here: whether it is long for the page
+    /// ([`super::chart_rotations`]).
+    pub box_sides_m: [f64; 2],
     /// The 3-D area (sort key and area accounting), model units².
     pub area_m2: f64,
     /// False for a chart without vertices (nothing to place).
@@ -322,7 +322,7 @@ pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChar
     let mut unit_scale = 0.0;
     let mut base_angle_rad = 0.0;
     let mut rectangular = false;
-    let mut box_texels = [0.0; 2];
+    let mut box_sides_m = [0.0; 2];
     let mut diameter_angle_rad = 0.0;
     if extent > 0.0 && extent.is_finite() {
         let norm = |p: [f64; 2]| [(p[0] - centre[0]) / extent, (p[1] - centre[1]) / extent];
@@ -348,11 +348,11 @@ pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChar
                     let box_area = mbox.along * mbox.across;
                     if box_area > 0.0 && uv_area_normalized >= RECTANGULAR_FILL * box_area {
                         rectangular = true;
-                        // Normalized units to texels at density 1: `extent · unit_scale`.
-                        let texels = |side: f64| side * extent * s;
-                        box_texels = [
-                            texels(mbox.along.max(mbox.across)),
-                            texels(mbox.along.min(mbox.across)),
+                        // Normalized units to model units at the packing scale: `extent · s`.
+                        let model = |side: f64| side * extent * s;
+                        box_sides_m = [
+                            model(mbox.along.max(mbox.across)),
+                            model(mbox.along.min(mbox.across)),
                         ];
                         // The edge direction horizontal, then a quarter turn when the box is
                         // longer along it (longer side vertical, as the diameter otherwise).
@@ -374,7 +374,7 @@ pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChar
         base_angle_rad,
         diameter_angle_rad,
         rectangular,
-        box_texels,
+        box_sides_m,
         area_m2: if unit_scale > 0.0 { chart.area_m2 } else { 0.0 },
         has_vertices: !chart.uv.is_empty(),
         outline: outline_triangles(chart.uv, chart.triangles),

@@ -60,7 +60,7 @@ pub fn chart_rotations(
     let texels = prep.area_m2 * texels_per_unit * texels_per_unit;
     let small = texels < SMALL_CHART_TEXELS && !holes;
     if rotations % 4 == 0 && ((prep.rectangular && !scored) || small) {
-        let [long, short] = prep.box_texels.map(|t| t * texels_per_unit);
+        let [long, short] = prep.box_sides_m.map(|m| m * texels_per_unit);
         let page_side = f64::from(page_texels[0].max(page_texels[1]));
         let diagonal = !small
             && rotations % 8 == 0
@@ -83,16 +83,24 @@ mod tests {
     use super::*;
     use crate::atlas::pack::PackChart;
 
-    /// A `w × h` rectangle of two triangles whose UVs are its model coordinates.
+    /// A `w × h` rectangle of two triangles (model units), its UVs at half scale and turned by
+    /// 0.5 rad; its prepared sides agree with [`place::box_sides_m`].
     fn rectangle(w: f64, h: f64) -> place::PreparedChart {
-        let uv = [[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]];
+        let (s, c) = 0.5f64.sin_cos();
+        let uv = [[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]]
+            .map(|[x, y]| [0.5 * (c * x - s * y), 0.5 * (s * x + c * y)]);
         let triangles = [[0, 1, 2], [0, 2, 3]];
         let chart = PackChart {
             uv: &uv,
             triangles: &triangles,
             area_m2: w * h,
         };
-        place::prepare_chart(0, &chart).unwrap()
+        let prep = place::prepare_chart(0, &chart).unwrap();
+        let expected = place::box_sides_m(&chart);
+        for (got, want) in prep.box_sides_m.iter().zip(expected) {
+            assert!((got - want).abs() < 1e-9 * want, "{got} against {want}");
+        }
+        prep
     }
 
     /// A rectangular strip tries its eighth turns only when it is long for the page at the
@@ -102,7 +110,7 @@ mod tests {
         let square = [1024, 1024];
         let strip = rectangle(20.0, 1.0);
         assert!(strip.rectangular);
-        assert_eq!(strip.box_texels.map(|t| t.round()), [20.0, 1.0]);
+        assert_eq!(strip.box_sides_m.map(|m| m.round()), [20.0, 1.0]);
         // 0.7 · 1024 texels: 35.84 texels per metre for 20 m.
         assert_eq!(chart_rotations(&strip, 36.0, 16, false, false, square), 8);
         assert_eq!(chart_rotations(&strip, 35.0, 16, false, false, square), 4);
@@ -127,7 +135,7 @@ mod tests {
         // A chart that is not rectangular tries every angle.
         let mut l_shape = rectangle(20.0, 1.0);
         l_shape.rectangular = false;
-        l_shape.box_texels = [0.0; 2];
+        l_shape.box_sides_m = [0.0; 2];
         assert_eq!(
             chart_rotations(&l_shape, 36.0, 16, false, false, square),
             16
