@@ -3,10 +3,11 @@
 //! Purpose: the third stage of the atlas pipeline. [`pack_charts`] scales every chart to one
 //! texel density, turns it (a nearly rectangular chart, [`place::RECTANGULAR_FILL`], to its
 //! minimum-area enclosing rectangle, axis-aligned, trying only its quarter turns, or its eighth
-//! turns when it is a strip long for the page; any other chart to its diameter, trying the angles of [`chart_rotations`]), and places it with two
-//! packers, keeping the denser packing. The horizon ("Tetris") packer of lscm-2002 §4,
-//! extended as isocharts-2004 §6 (insertion from four directions, 16 rotations), and *hole
-//! filling* ([`hole`], an extension of the papers). A fit-to-page packing searches its
+//! turns when it is a strip long for the page; any other chart to its diameter, trying the
+//! angles of [`chart_rotations`]), and places it with two packers, keeping the denser
+//! packing. The horizon ("Tetris") packer of lscm-2002 §4, extended as isocharts-2004 §6
+//! (insertion from four directions, 16 rotations), and *hole filling* ([`hole`], an extension
+//! of the papers). A fit-to-page packing searches its
 //! density with the packer of [`PackOptions::first_packer`] first (hole filling first only
 //! below [`HOLE_SCORED_MIN_CHARTS`] charts), then with the other only above the density found
 //! ([`FirstPacker::Horizons`] runs hole filling only where the

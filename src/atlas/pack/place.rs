@@ -54,10 +54,10 @@ pub const CENTRE_GROW_TEXELS: f64 = 0.01;
 /// A chart whose UV area is at least this fraction of its minimum-area enclosing rectangle is
 /// *rectangular* ([`PreparedChart::rectangular`]): it is turned axis-aligned and tries only the
 /// quarter turns (the eighth turns when it is a strip long for the page,
-/// [`super::DIAGONAL_MIN_ASPECT`]). Trade-off: for such charts the other angles only grow the padded box (a
-/// rectangle's least box is its own), while each costs a footprint and a search; charts that
-/// fill their box less (L shapes, discs) keep every angle, since a turned bay can take a
-/// neighbour.
+/// [`super::DIAGONAL_MIN_ASPECT`]). Trade-off: for such charts the other angles only grow the
+/// padded box (a rectangle's least box is its own), while each costs a footprint and a search;
+/// charts that fill their box less (L shapes, discs) keep every angle, since a turned bay can
+/// take a neighbour.
 pub const RECTANGULAR_FILL: f64 = 0.95;
 
 /// Empty line of an extents array.
