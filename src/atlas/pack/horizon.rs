@@ -410,21 +410,31 @@ impl HorizonPage {
             })
             .collect();
         let Scratch {
-            order,
             empty_lines,
             t_key,
             base,
         } = scratch;
-        order.clear();
-        order.extend((0..prof.len()).filter(|&c| prof[c] != NO_LINE));
-        // Only the 4 most protruding lines need an order (the key lines below); a partial
-        // selection, deterministic by (profile, line).
-        if order.len() > 4 {
-            order.select_nth_unstable_by_key(3, |&c| (prof[c], c));
+        // One pass over the lines: how many have footprint, the sum of their profile, and the
+        // 4 most protruding (the least `(prof, line)`, in that order: the key lines below).
+        let (mut n, mut sum_prof) = (0i64, 0i64);
+        let mut top = [(NO_LINE, usize::MAX); 4];
+        empty_lines.clear();
+        for (c, &p) in prof.iter().enumerate() {
+            if p == NO_LINE {
+                empty_lines.push(c);
+                continue;
+            }
+            n += 1;
+            sum_prof += i64::from(p);
+            if (p, c) < top[3] {
+                let mut i = 3;
+                while i > 0 && (p, c) < top[i - 1] {
+                    top[i] = top[i - 1];
+                    i -= 1;
+                }
+                top[i] = (p, c);
+            }
         }
-        let k4 = order.len().min(4);
-        order[..k4].sort_unstable_by_key(|&c| (prof[c], c));
-        let n = order.len() as i64;
         if n == 0 {
             return None;
         }
@@ -433,7 +443,11 @@ impl HorizonPage {
         // seen). A lower bound of t at every position from them, computed line by line over all
         // positions (contiguous, vectorizes), rejects most positions with one comparison; any
         // set of lines gives a true lower bound, so the result does not depend on the choice.
-        let mut key: Vec<usize> = order[..k4].to_vec();
+        let mut key: Vec<usize> = top
+            .iter()
+            .take(n.min(4) as usize)
+            .map(|&(_, c)| c)
+            .collect();
         if prof.len() > 2 * KEY_SEGMENTS {
             let step = prof.len().div_ceil(KEY_SEGMENTS);
             for s0 in (0..prof.len()).step_by(step) {
@@ -448,11 +462,8 @@ impl HorizonPage {
                 }
             }
         }
-        let sum_prof: i64 = order.iter().map(|&c| i64::from(prof[c])).sum();
-        // The lines without footprint: the wall sum over the others is the prefix sum over all
-        // lines less theirs (usually none or few).
-        empty_lines.clear();
-        empty_lines.extend((0..prof.len()).filter(|&c| prof[c] == NO_LINE));
+        // The lines without footprint (`empty_lines`): the wall sum over the others is the
+        // prefix sum over all lines less theirs (usually none or few).
         let lo = lo.max(0);
         let hi = hi.min(wall.len() as i32 - len);
         if lo > hi {
@@ -666,8 +677,6 @@ impl Group {
 /// Buffers of [`HorizonPage::prepare`], reused across the orientations of a side.
 #[derive(Debug, Default)]
 struct Scratch {
-    /// The chart's non-empty lines, the 4 most protruding first.
-    order: Vec<usize>,
     /// The chart's empty lines.
     empty_lines: Vec<usize>,
     /// Per position, the `t` the key lines force.
