@@ -58,7 +58,7 @@ use pack_input::{pack_charts_of, pack_inputs, PackInputs};
 use packing_cuts::cut_for_packing;
 use parameterize::{parameterize_charts, ChartDefect};
 use segment::{segment_charts_with, SegmentMethod};
-use uv_guard::{folds, guard_uvs, restore_slivers, split_off, torn_parts};
+use uv_guard::{folds, guard_uvs, raster_slivers, restore_slivers, split_off, torn_parts};
 
 /// Counters of one [`generate`] run.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -256,7 +256,9 @@ pub fn generate(
     // Pack and write the `f32` corner UVs, then the last line of defence (`uv_guard.rs`):
     // faults the guard cannot repair in place, and the parts of a chart that the output's
     // connectivity tears apart, are split off into charts of their own and the charts packed
-    // again, at most `GUARD_SPLIT_ROUNDS` times.
+    // again, at most `GUARD_SPLIT_ROUNDS` times; when faults are left after that, once more
+    // with every sliver thin enough for the report's raster to flip
+    // (`uv_guard::raster_slivers`).
     let mut parameterized = parameterized;
     let mut packing_of_cut_step = packing_of_cut_step;
     let mut round = 0;
@@ -284,7 +286,9 @@ pub fn generate(
             faces.into_iter().map(|f| vec![f]).collect()
         };
         let mut faults = single(outcome.unrepaired);
-        if faults.is_empty() || round == GUARD_SPLIT_ROUNDS {
+        // After the round that splits the slivers off too, nothing more is split.
+        let last = round > GUARD_SPLIT_ROUNDS;
+        if faults.is_empty() || last {
             // In the last round too, for the sliver moves at an overlap to be undone.
             let (overlapping, exact) = folds(
                 mesh,
@@ -304,7 +308,7 @@ pub fn generate(
         }
         let moved = slivers.vertices_moved();
         stats.uv_nudged_vertices += moved;
-        if faults.is_empty() || round == GUARD_SPLIT_ROUNDS {
+        if faults.is_empty() || last {
             // The report reuses the guard's searches on these UVs: its exact overlaps, and its
             // orientation check, brought up to date where the sliver repair moved a vertex
             // since (undone moves put every corner back, bit for bit).
@@ -318,6 +322,22 @@ pub fn generate(
                 check,
             };
             break (written, parameterized.segmentation.charts, reuse);
+        }
+        if round == GUARD_SPLIT_ROUNDS {
+            // Faults are left after every split round: the last split takes every sliver that
+            // the sampling's snapping could flip apart too (`uv_guard::raster_slivers`), so that
+            // the last packing cannot lay another one over its neighbours.
+            let mut taken = vec![false; mesh.num_faces()];
+            for f in faults.iter().flatten() {
+                taken[f.index()] = true;
+            }
+            let rasterized = raster_slivers(&check, &written.corner_uvs, size, &face_chart);
+            faults.extend(
+                rasterized
+                    .into_iter()
+                    .filter(|f| !taken[f.index()])
+                    .map(|f| vec![f]),
+            );
         }
         stats.uv_guard_splits += faults.iter().map(Vec::len).sum::<usize>();
         parameterized = split_off(mesh, &parameterized, &faults, options)?;
@@ -368,10 +388,13 @@ pub fn generate(
     })
 }
 
-/// Splits of the last line of defence (`uv_guard.rs`) before the pipeline gives up and lets
-/// the report show what is left. Each round packs again, which rounds every chart anew: a
-/// cylinder with three needles 1e-7 long needed three rounds, one needle each (4,096 generated
-/// defective meshes needed at most that); the bound caps the cost of a pathological input.
+/// Splits of the last line of defence (`uv_guard.rs`) of the faults it finds, before one last
+/// split that also takes every sliver apart (`uv_guard::raster_slivers`), after which the report
+/// shows whatever is left. Each round packs again, which rounds every chart anew: a cylinder
+/// with three needles 1e-7 long needed three rounds, one needle each (4,096 generated defective
+/// meshes needed at most that); a fan of 1,000 faces 1e-6 thick still had crossings after 12,
+/// each packing flipping other slivers in the report's raster. The bound caps the cost of a
+/// pathological input (at most `GUARD_SPLIT_ROUNDS + 2` packings).
 const GUARD_SPLIT_ROUNDS: usize = 4;
 
 /// The written UVs of one packing.

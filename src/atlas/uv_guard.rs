@@ -33,7 +33,10 @@
 //!    so are, after step 4, the faces that [`folds`] finds covering a texel centre of another
 //!    face of their chart by the report's own sampling (a sliver thinner than the raster's
 //!    rounding), or else crossing another face of their chart by the report's exact test:
-//!    alone, a face keeps the padding from every other chart;
+//!    alone, a face keeps the padding from every other chart. When faults are still found after
+//!    the caller's split rounds, its last split also takes apart every face thinner than that
+//!    rounding could flip ([`raster_slivers`]): on a chart made of such slivers, each packing
+//!    flips others, one at a time never ends;
 //! 4. slivers whose UV height the rounding set far from their 3-D height get their apex moved
 //!    back (`slivers.rs`, [`restore_slivers`]), and where that is not enough one base vertex
 //!    with it: the one step that moves a corner of a face that is not flipped or degenerate,
@@ -591,6 +594,54 @@ pub(super) fn torn_parts(
         }
     }
     out
+}
+
+/// UV height, in texels, below which the last split round of `generate` splits a face off its
+/// chart ([`raster_slivers`]). The report's and the evaluator's sampling snaps every corner to
+/// `1/256` texel, a move of at most `√2/512` texel, which can flip a face whose UV height is
+/// below about `1.4/256` texel and lay it over its neighbours; the margin covers the lower
+/// density of the packing after the split (more charts). Trade-off: a higher bound splits off
+/// faces that could not flip; a lower one leaves faces that the last packing may flip.
+pub(super) const RASTER_SLIVER_TEXELS: f64 = 4.0 / 256.0;
+
+/// The faces that the last split round of `generate` splits off besides the faults: every face
+/// with 3-D area (not `check.degenerate_3d`) in a chart of more than one face (`face_chart`, the
+/// pipeline's chart of each face) whose UV height in `corner_uvs` (twice its area over its
+/// longest edge, on pages of `size = [W, H]` texels) is below [`RASTER_SLIVER_TEXELS`],
+/// ascending. Splitting faults off one at a time does not converge on charts made of such
+/// slivers: each packing rounds the corners anew and the sampling's snapping flips another one
+/// over its neighbour (a fan of 1,000 faces 1e-6 thick still had crossings after 12 rounds).
+/// Alone, a face cannot cover a texel of its own chart twice, and keeps the padding from the
+/// others. Deterministic: one pass in face order.
+pub(super) fn raster_slivers(
+    check: &OrientationCheck,
+    corner_uvs: &[[[f32; 2]; 3]],
+    size: [u32; 2],
+    face_chart: &[u32],
+) -> Vec<FaceId> {
+    let charts = face_chart
+        .iter()
+        .map(|&c| c as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut faces_in = vec![0usize; charts];
+    for &c in face_chart {
+        faces_in[c as usize] += 1;
+    }
+    let [w, h] = size.map(f64::from);
+    (0..corner_uvs.len())
+        .filter(|&f| !check.degenerate_3d[f] && faces_in[face_chart[f] as usize] > 1)
+        .filter(|&f| {
+            let p = corner_uvs[f].map(|c| [f64::from(c[0]) * w, f64::from(c[1]) * h]);
+            let e = |a: usize, b: usize| (p[b][0] - p[a][0]).hypot(p[b][1] - p[a][1]);
+            let longest = e(0, 1).max(e(1, 2)).max(e(2, 0));
+            let cross = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
+                - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
+            // A face of no UV extent at all is the faults' business (it is one of them).
+            longest > 0.0 && cross.abs() < RASTER_SLIVER_TEXELS * longest
+        })
+        .map(|f| FaceId(f as u32))
+        .collect()
 }
 
 /// `validated` with each group of `groups` (faces ascending, each group within one chart)

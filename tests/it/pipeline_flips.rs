@@ -382,6 +382,28 @@ fn needles_rounded_across_their_neighbours_are_split_off_until_none_is_left() {
     assert_clean(&mesh, &atlas);
 }
 
+/// A fan of 200 faces about a centre, flattened to 1e-5 of its width (an ellipse of semi-axes 1
+/// and 1e-5): near the rim every face is a sliver thinner than the report's raster snaps (1/256
+/// texel), so each packing snaps others over their neighbours. Split off one at a time, 2,124
+/// texels were still covered twice after the four split rounds; the last split now takes every
+/// such sliver apart.
+#[test]
+fn a_fan_of_slivers_thinner_than_the_raster_is_split_until_nothing_overlaps() {
+    let n = 200u32;
+    let mut positions = vec![[0.0, 0.0, 0.0]];
+    positions.extend((0..n).map(|k| {
+        let t = 2.0 * std::f64::consts::PI * f64::from(k) / f64::from(n);
+        [t.cos(), 1e-5 * t.sin(), 0.0]
+    }));
+    let triangles = (1..n).map(|k| [0, k, k + 1]).collect();
+    let mesh = TriangleMesh::build(&MeshInput::single_group(positions, triangles))
+        .expect("builds")
+        .mesh;
+    let atlas = generate(&mesh, &AtlasOptions::default(), &mut NoProgress).expect("generates");
+    assert!(atlas.stats.uv_guard_splits > 0, "{:?}", atlas.stats);
+    assert_clean(&mesh, &atlas);
+}
+
 /// A cylinder whose needle end lies 4e-15 from a corner, beside faces of area as short as 4e-8,
 /// one of which has both. The weld used to join them (the ends of a zero-area face): the chart
 /// was flattened as one piece, but in the file two of its faces met the rest only through that
