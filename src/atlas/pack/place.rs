@@ -311,7 +311,7 @@ pub fn prepare_chart(index: usize, chart: &PackChart<'_>) -> Result<PreparedChar
         .filter(|(_, &r)| r)
         .map(|(p, _)| *p)
         .collect();
-    let (lo, hi) = bounds(&points);
+    let (lo, hi) = bounds(points.iter().copied());
     let centre = if points.is_empty() {
         [0.0, 0.0]
     } else {
@@ -685,17 +685,13 @@ fn orient(
         let (x, y) = (p[0] - prep.centre[0], p[1] - prep.centre[1]);
         [m[0][0] * x + m[0][1] * y, m[1][0] * x + m[1][1] * y]
     };
-    let (lo, hi) = bounds(
-        &prep
-            .outline
+    // Every corner of the outline triangles, without collecting them (a chart of a scan has
+    // thousands).
+    let (lo, hi) = bounds(prep.outline.iter().flat_map(|&t| {
+        chart.triangles[t as usize]
             .iter()
-            .flat_map(|&t| {
-                chart.triangles[t as usize]
-                    .iter()
-                    .map(|&i| rotated(chart.uv[i as usize]))
-            })
-            .collect::<Vec<_>>(),
-    );
+            .map(|&i| rotated(chart.uv[i as usize]))
+    }));
     let (lo, hi) = if lo[0] <= hi[0] {
         (lo, hi)
     } else {
@@ -874,7 +870,7 @@ fn orient(
     o
 }
 
-fn bounds(points: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
+fn bounds(points: impl IntoIterator<Item = [f64; 2]>) -> ([f64; 2], [f64; 2]) {
     let mut lo = [f64::INFINITY; 2];
     let mut hi = [f64::NEG_INFINITY; 2];
     for p in points {
