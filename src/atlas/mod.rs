@@ -331,7 +331,12 @@ pub fn generate(
             for f in faults.iter().flatten() {
                 taken[f.index()] = true;
             }
-            let rasterized = raster_slivers(&check, &written.corner_uvs, size, &face_chart);
+            let rasterized = raster_slivers(
+                &check,
+                &written.corner_uvs,
+                size,
+                &parameterized.segmentation.charts,
+            );
             faults.extend(
                 rasterized
                     .into_iter()

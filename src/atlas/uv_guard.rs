@@ -605,43 +605,39 @@ pub(super) fn torn_parts(
 pub(super) const RASTER_SLIVER_TEXELS: f64 = 4.0 / 256.0;
 
 /// The faces that the last split round of `generate` splits off besides the faults: every face
-/// with 3-D area (not `check.degenerate_3d`) in a chart of more than one face (`face_chart`, the
-/// pipeline's chart of each face) whose UV height in `corner_uvs` (twice its area over its
-/// longest edge, on pages of `size = [W, H]` texels) is below [`RASTER_SLIVER_TEXELS`],
-/// ascending. Splitting faults off one at a time does not converge on charts made of such
-/// slivers: each packing rounds the corners anew and the sampling's snapping flips another one
-/// over its neighbour (a fan of 1,000 faces 1e-6 thick still had crossings after 12 rounds).
-/// Alone, a face cannot cover a texel of its own chart twice, and keeps the padding from the
-/// others. Deterministic: one pass in face order.
+/// with 3-D area (not `check.degenerate_3d`) in a chart of more than one face (`charts`, the
+/// pipeline's) whose UV height in `corner_uvs` (twice its area over its longest edge, on pages
+/// of `size = [W, H]` texels) is below [`RASTER_SLIVER_TEXELS`], ascending. Splitting faults
+/// off one at a time does not converge on charts made of such slivers: each packing rounds the
+/// corners anew and the sampling's snapping flips another one over its neighbour (a fan of
+/// 1,000 faces 1e-6 thick still had crossings after 12 rounds). Alone, a face cannot cover a
+/// texel of its own chart twice, and keeps the padding from the others. Deterministic: the
+/// faces sorted.
 pub(super) fn raster_slivers(
     check: &OrientationCheck,
     corner_uvs: &[[[f32; 2]; 3]],
     size: [u32; 2],
-    face_chart: &[u32],
+    charts: &[Vec<FaceId>],
 ) -> Vec<FaceId> {
-    let charts = face_chart
-        .iter()
-        .map(|&c| c as usize + 1)
-        .max()
-        .unwrap_or(0);
-    let mut faces_in = vec![0usize; charts];
-    for &c in face_chart {
-        faces_in[c as usize] += 1;
-    }
     let [w, h] = size.map(f64::from);
-    (0..corner_uvs.len())
-        .filter(|&f| !check.degenerate_3d[f] && faces_in[face_chart[f] as usize] > 1)
-        .filter(|&f| {
-            let p = corner_uvs[f].map(|c| [f64::from(c[0]) * w, f64::from(c[1]) * h]);
-            let e = |a: usize, b: usize| (p[b][0] - p[a][0]).hypot(p[b][1] - p[a][1]);
-            let longest = e(0, 1).max(e(1, 2)).max(e(2, 0));
-            let cross = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
-                - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
-            // A face of no UV extent at all is the faults' business (it is one of them).
-            longest > 0.0 && cross.abs() < RASTER_SLIVER_TEXELS * longest
-        })
-        .map(|f| FaceId(f as u32))
-        .collect()
+    let thin = |f: usize| {
+        let p = corner_uvs[f].map(|c| [f64::from(c[0]) * w, f64::from(c[1]) * h]);
+        let e = |a: usize, b: usize| (p[b][0] - p[a][0]).hypot(p[b][1] - p[a][1]);
+        let longest = e(0, 1).max(e(1, 2)).max(e(2, 0));
+        let cross =
+            (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
+        // A face of no UV extent at all is the faults' business (it is one of them).
+        longest > 0.0 && cross.abs() < RASTER_SLIVER_TEXELS * longest
+    };
+    let mut faces: Vec<FaceId> = charts
+        .iter()
+        .filter(|faces| faces.len() > 1)
+        .flatten()
+        .copied()
+        .filter(|f| !check.degenerate_3d[f.index()] && thin(f.index()))
+        .collect();
+    faces.sort_unstable();
+    faces
 }
 
 /// `validated` with each group of `groups` (faces ascending, each group within one chart)
