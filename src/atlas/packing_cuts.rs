@@ -232,7 +232,11 @@ pub(super) fn cut_for_packing(
     // The density at which `v`'s charts would pack at efficiency `goal`, with the packing,
     // when one page holds them there (`pack_one_page`: the horizons, then the plain first-fit
     // hole filling, each stopping at the first chart that does not fit; a cheap test before
-    // the search of `estimate`).
+    // the search of `estimate`). The total area is the first try's: every try partitions the
+    // same faces, and the sum over other charts differs in its last bits, which would make
+    // another density of the same goal, and so another pin that drops the footprints the
+    // cache holds for the charts the try leaves alone.
+    let reference_total_m2 = std::cell::OnceCell::new();
     let fits_at = |v: &parameterize::ParameterizedCharts,
                    goal: f64|
      -> Result<Option<(f64, Packing)>, AtlasError> {
@@ -241,6 +245,7 @@ pub(super) fn cut_for_packing(
         if packed.is_empty() || total.is_nan() || total <= 0.0 {
             return Ok(None);
         }
+        let total = *reference_total_m2.get_or_init(|| total);
         let density = (goal * page / total).sqrt();
         let input = pack_charts_of(v, &packed, &inputs.triangles, &inputs.area_m2);
         cache.pin(density);
