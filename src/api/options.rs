@@ -125,7 +125,8 @@ pub struct OptionsJson {
     /// Fixed texel density in texels per model unit; unset fits everything on one page.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub texels_per_unit: Option<f64>,
-    /// Rotations tried per chart when packing, 1..=64, default 16.
+    /// Rotations tried per chart when packing, 1..=64, default 16 (a multiple of 8 up to twice as
+    /// many on an atlas of fewer than 33 charts that packs below 0.72).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rotations: Option<u32>,
     /// Upper bound on the number of charts after segmentation (best effort); unset: no bound.

@@ -11,8 +11,9 @@ use super::error::AtlasError;
 use super::options::AtlasOptions;
 use super::pack::place::{box_sides_m, box_waste_m2, length_pieces, neck_cut};
 use super::pack::{
-    pack_charts_above, pack_charts_cached, pack_one_page, too_large_for_a_page, FirstPacker,
-    PackCache, PackChart, PackOptions, Packing, TexelDensity,
+    pack_charts_above, pack_charts_cached, pack_one_page, pack_one_page_horizons,
+    too_large_for_a_page, FirstPacker, PackCache, PackChart, PackOptions, Packing, TexelDensity,
+    FIT_PROBE_STEP, HOLE_SCORED_MIN_CHARTS, MAX_ROTATIONS,
 };
 use super::pack_input::{pack_charts_of, pack_inputs};
 use super::parameterize;
@@ -80,8 +81,8 @@ const LONG_CUT_ROUNDS: usize = 3;
 /// The long cuts also run on meshes above [`PACKING_CUT_MAX_FACES`] faces, up to this many
 /// (alone: no cut by waste, no last resort), when a chart is that long: a strip caps the
 /// packing of any mesh (a tube of 22k triangles packed at 0.126). Trade-off: finding the long
-/// charts costs every chart's minimum-area rectangle (6 ms on the bunny's 69k faces, 0.113 → 0.119 s);
-/// only a mesh that has one pays a packing more per round.
+/// charts costs every chart's minimum-area rectangle (6 ms on the bunny's 69k faces, 0.113 →
+/// 0.119 s); only a mesh that has one pays a packing more per round.
 const LONG_CUT_MAX_FACES: usize = 200_000;
 /// At most this many pieces per chart and round ([`LONG_CUT_FRACTION`]).
 const LONG_CUT_MAX_PIECES: usize = 16;
@@ -159,7 +160,10 @@ pub(super) fn pack_options(mesh: &TriangleMesh, options: &AtlasOptions) -> PackO
 /// with [`TexelDensity::FitToPage`] (an explicit density does not change with the cut: there
 /// only the charts too large for a page are cut, [`cut_to_pages`], and nothing is packed). On
 /// meshes above [`PACKING_CUT_MAX_FACES`] faces, up to [`LONG_CUT_MAX_FACES`], only the long
-/// cuts run, and only when a chart is that long (else nothing is packed here).
+/// cuts run, and only when a chart is that long (else nothing is packed here). Last, on the
+/// meshes of up to [`PACKING_CUT_MAX_FACES`] faces whose packing is still below the target, a
+/// packing of fewer than [`HOLE_SCORED_MIN_CHARTS`] charts is made denser with more angles per
+/// chart where they find one ([`more_angles_above`]).
 /// Deterministic (every step is). Returns the charts to use, the number of charts the cuts
 /// added and the packing of those charts.
 pub(super) fn cut_for_packing(
@@ -421,7 +425,7 @@ pub(super) fn cut_for_packing(
     };
     let CutState {
         mut current,
-        best,
+        mut best,
         mut best_packing,
         mut cuts,
     } = if long_only {
@@ -450,7 +454,8 @@ pub(super) fn cut_for_packing(
             let picks: Vec<(usize, Way)> = picks.into_iter().map(|i| (i, Way::Diameter)).collect();
             let candidate = cut(base, &picks, true)?;
             let cut_now = cut_before + picks.len();
-            if let Some((_, packing)) = try_candidate(&candidate, best)? {
+            if let Some((eff, packing)) = try_candidate(&candidate, best)? {
+                best = eff;
                 cuts = cut_now;
                 best_packing = packing;
                 current = candidate;
@@ -459,7 +464,71 @@ pub(super) fn cut_for_packing(
             level = Some((candidate, cut_now));
         }
     }
+    // The packing kept, denser with more angles where they find one, while below the target.
+    if !long_only && best < below {
+        if let Some(packing) = best_packing.as_mut() {
+            let inputs = pack_inputs(mesh, &current)?;
+            let (packed, _) = packed_of(&inputs);
+            if packed.len() < HOLE_SCORED_MIN_CHARTS {
+                let input = pack_charts_of(&current, &packed, &inputs.triangles, &inputs.area_m2);
+                more_angles_above(&input, &pack_options, packing, &cache)?;
+            }
+        }
+    }
     Ok((current, cuts, best_packing))
+}
+
+/// Angle counts that [`more_angles_above`] tries, as multiples of `PackOptions::rotations`
+/// (in halves: 3 is 1.5 times as many), those above [`MAX_ROTATIONS`] left out. Only for a
+/// count that is a multiple of 8, as `pack::hole_rotations`: a user who asks for 1, 2 or 4
+/// rotations (none, half turns, quarter turns) gets no other angle.
+const MORE_ANGLES_HALVES: [u32; 2] = [3, 4];
+/// Densities that [`more_angles_above`] tries at most per angle count, each
+/// [`FIT_PROBE_STEP`] above the last.
+const MORE_ANGLES_PROBES: usize = 8;
+
+/// `packing` (of `charts`, a fit-to-page packing of `options`) replaced by a denser one when
+/// more angles per chart find one: for each count of [`MORE_ANGLES_HALVES`], one page with the
+/// horizons alone ([`pack_one_page_horizons`]) at densities [`FIT_PROBE_STEP`] apart above the
+/// packing's, upwards until one does not fit ([`MORE_ANGLES_PROBES`] at most). Whether charts
+/// fit is not monotone in the angles: on few large charts the packing moves by ±0.04 with the
+/// angle count (docs/benchmarks.md), and the densest of the counts is kept, so the packing
+/// never gets less dense. Trade-off: a count that finds nothing costs one horizon packing of
+/// one page, stopped at its first chart that does not fit (hole filling after it would find
+/// a few more and cost twice as much); `cut_for_packing` runs it only on atlases of fewer
+/// than [`HOLE_SCORED_MIN_CHARTS`] charts packed below its target, where a packing is cheap.
+/// Deterministic. `packing.trials` counts the packings it ran too.
+fn more_angles_above(
+    charts: &[PackChart<'_>],
+    options: &PackOptions,
+    packing: &mut Packing,
+    cache: &PackCache,
+) -> Result<(), AtlasError> {
+    if options.rotations % 8 != 0 {
+        return Ok(());
+    }
+    let mut trials = packing.trials;
+    for halves in MORE_ANGLES_HALVES {
+        let rotations = options.rotations * halves / 2;
+        if rotations > MAX_ROTATIONS {
+            continue;
+        }
+        let more = PackOptions {
+            rotations,
+            ..*options
+        };
+        let base = packing.texels_per_unit;
+        for k in 1..=MORE_ANGLES_PROBES {
+            let density = base * (1.0 + FIT_PROBE_STEP * k as f64);
+            trials += 1;
+            match pack_one_page_horizons(charts, &more, density, Some(cache))? {
+                Some(denser) => *packing = denser,
+                None => break,
+            }
+        }
+    }
+    packing.trials = trials;
+    Ok(())
 }
 
 /// `faces` (a chart) cut into the pieces `piece` numbers (one per face, in the order of
@@ -692,4 +761,76 @@ fn cut_to_pages(
         current = candidate;
     }
     Ok((current, cuts))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::atlas::pack::pack_charts;
+    use crate::atlas::pack::test_charts::{as_pack_charts, check_packing, mixed_set};
+
+    /// More angles above a fit-to-page packing: never less dense, every guarantee of a
+    /// packing kept, the same result twice; and on one of these few-chart sets at least, denser
+    /// (1 of the 12 when it was written).
+    #[test]
+    fn more_angles_keep_every_guarantee_and_find_denser_packings_of_few_charts() {
+        let options = PackOptions::default();
+        let mut denser = 0;
+        for seed in 1..=12 {
+            let charts = mixed_set(4 + seed as usize % 5, seed);
+            let borrowed = as_pack_charts(&charts);
+            let progress = &mut StageProgress::ignored(Stage::Pack);
+            let found = pack_charts(&borrowed, &options, progress).unwrap();
+            let mut packing = found.clone();
+            more_angles_above(&borrowed, &options, &mut packing, &PackCache::new()).unwrap();
+            let mut again = found.clone();
+            more_angles_above(&borrowed, &options, &mut again, &PackCache::new()).unwrap();
+            assert_eq!(again, packing, "seed {seed}: not deterministic");
+            assert!(
+                packing.trials > found.trials,
+                "seed {seed}: no trial counted"
+            );
+            let d = packing.texels_per_unit;
+            assert!(d >= found.texels_per_unit, "seed {seed}: less dense");
+            if d > found.texels_per_unit {
+                denser += 1;
+            }
+            let fixed = PackOptions {
+                density: TexelDensity::TexelsPerUnit(d),
+                ..options
+            };
+            let check = check_packing(&borrowed, &packing, &fixed);
+            assert_eq!(packing.num_pages, 1, "seed {seed}");
+            assert_eq!(
+                (
+                    check.overlap_texels,
+                    check.padding_violation_texels,
+                    check.edge_violation_texels,
+                    check.out_of_range_uvs
+                ),
+                (0, 0, 0, 0),
+                "seed {seed}: {check:?}"
+            );
+        }
+        // Counts that are not a multiple of 8 get no other angle.
+        let charts = mixed_set(6, 3);
+        let borrowed = as_pack_charts(&charts);
+        let quarter = PackOptions {
+            rotations: 4,
+            ..options
+        };
+        let found = pack_charts(
+            &borrowed,
+            &quarter,
+            &mut StageProgress::ignored(Stage::Pack),
+        );
+        let found = found.unwrap();
+        let mut packing = found.clone();
+        more_angles_above(&borrowed, &quarter, &mut packing, &PackCache::new()).unwrap();
+        assert_eq!(packing, found);
+        assert!(
+            denser >= 1,
+            "more angles found a denser packing on {denser} of 12 sets"
+        );
+    }
 }

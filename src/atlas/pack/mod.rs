@@ -86,7 +86,7 @@ mod types;
 pub use cache::PackCache;
 use fit::{fit_to_page, fit_to_page_after, fit_to_page_unless_first_misses, FirstTry, FitStart};
 pub use fit::{FIT_GUESS_GROWTH, FIT_START_FILL};
-pub use one_page::pack_one_page;
+pub use one_page::{pack_one_page, pack_one_page_horizons};
 pub use rotations::{
     chart_rotations, hole_rotations, DIAGONAL_MIN_ASPECT, DIAGONAL_MIN_PAGE_FRACTION,
     SMALL_CHART_TEXELS,
