@@ -29,7 +29,7 @@ pub fn pack_one_page(
 }
 
 /// [`pack_one_page`] with the horizons alone: `Ok(None)` when they do not place every chart,
-/// without the hole filling after them. Half the cost of a test that fails.
+/// without the hole filling after them: a test that fails costs one trial instead of two.
 pub fn pack_one_page_horizons(
     charts: &[PackChart<'_>],
     options: &PackOptions,

@@ -58,7 +58,8 @@ pub struct PackOptions {
     /// [`hole_rotations`](super::hole_rotations) (24 for 16) when there are at least
     /// [`HOLE_SCORED_MIN_CHARTS`](super::HOLE_SCORED_MIN_CHARTS) charts. A multiple of 8 is
     /// also raised to 1.5 and 2 times itself by the last tries of the packing-aware cuts, on
-    /// fewer charts that pack below their target (`atlas::packing_cuts`).
+    /// fewer than [`HOLE_SCORED_MIN_CHARTS`](super::HOLE_SCORED_MIN_CHARTS) charts that pack
+    /// below their target (`atlas::packing_cuts`).
     pub rotations: u32,
     /// The packer a fit-to-page density search runs first. Default
     /// [`FirstPacker::HoleFilling`].
